@@ -1,0 +1,695 @@
+//! Turns a robot file and a scenario into a [`Model`]: applies the scenario's
+//! overrides, walks the link tree from `world`, merges links welded by fixed
+//! joints into one body (combining inertia about the merged frame), numbers the
+//! state, resolves every element to a body, and checks the mass matrix.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use nalgebra::{Isometry3, Matrix3, Vector3};
+
+use crate::dynamics;
+use crate::error::LoadError;
+use crate::model::{
+    Body, Controller, Frame, FrictionContact, Isolator, Joint, JointMotion, Model, PointAxis,
+    SignalInfo, StateKind, StateLayout,
+};
+use crate::robot::{JointKind, PointAxisSpec, RobotSpec};
+use crate::scenario::Scenario;
+
+/// Name of the root link.
+pub const WORLD: &str = "world";
+
+/// A loaded study: the scenario and the model it describes.
+#[derive(Debug, Clone)]
+pub struct Loaded {
+    /// The checked scenario.
+    pub scenario: Scenario,
+    /// The robot file after the scenario's overrides.
+    pub robot: RobotSpec,
+    /// The assembled model.
+    pub model: Model,
+}
+
+/// Reads a scenario, its robot file, and assembles the model.
+pub fn load(scenario_path: &Path) -> Result<Loaded, LoadError> {
+    let scenario = Scenario::from_file(scenario_path)?;
+    let robot = RobotSpec::from_file(&scenario.robot)?;
+    let (robot, model) = assemble(robot, &scenario)?;
+    Ok(Loaded {
+        scenario,
+        robot,
+        model,
+    })
+}
+
+/// Applies the scenario's overrides to the robot and assembles the model.
+pub fn assemble(
+    mut robot: RobotSpec,
+    scenario: &Scenario,
+) -> Result<(RobotSpec, Model), LoadError> {
+    apply_overrides(&mut robot, scenario)?;
+    let model = Assembler::new(&robot, scenario)?.build()?;
+    Ok((robot, model))
+}
+
+const ISOLATOR_KEYS: [&str; 12] = [
+    "k_x", "k_y", "k_z", "k_rx", "k_ry", "k_rz", "c_x", "c_y", "c_z", "c_rx", "c_ry", "c_rz",
+];
+const POINT_KEYS: [&str; 3] = ["x", "y", "z"];
+
+/// Applies `[overrides.<name>]` tables to friction, isolator, actuator, sensor
+/// elements and links. Link `mass` scales the link's inertia with it (uniform density).
+pub fn apply_overrides(robot: &mut RobotSpec, scenario: &Scenario) -> Result<(), LoadError> {
+    for o in &scenario.overrides {
+        let key_path = format!("overrides.{}.{}", o.target, o.key);
+        let unknown_key = |allowed: &[&str]| {
+            scenario.error(
+                &key_path,
+                format!(
+                    "\"{}\" has no parameter \"{}\" (allowed: {})",
+                    o.target,
+                    o.key,
+                    allowed.join(", ")
+                ),
+            )
+        };
+        if let Some(friction) = robot.frictions.iter_mut().find(|f| f.name == o.target) {
+            if let Some(slot) = friction.lugre.get_mut(&o.key) {
+                *slot = o.value;
+            } else if let Some(axis) = POINT_KEYS.iter().position(|k| *k == o.key) {
+                friction.point[axis] = o.value;
+            } else {
+                let mut allowed = LugreParams::NAMES.to_vec();
+                allowed.extend(POINT_KEYS);
+                return Err(unknown_key(&allowed));
+            }
+            friction
+                .lugre
+                .validate()
+                .map_err(|e| scenario.error(&key_path, e.to_string()))?;
+        } else if let Some(isolator) = robot.isolators.iter_mut().find(|i| i.name == o.target) {
+            let index = ISOLATOR_KEYS
+                .iter()
+                .position(|k| *k == o.key)
+                .ok_or_else(|| unknown_key(&ISOLATOR_KEYS))?;
+            if o.value < 0.0 {
+                return Err(scenario.error(&key_path, format!("must be >= 0, got {}", o.value)));
+            }
+            if index < 6 {
+                isolator.stiffness[index] = o.value;
+            } else {
+                isolator.damping[index - 6] = o.value;
+            }
+        } else if let Some(element) = robot
+            .actuators
+            .iter_mut()
+            .chain(robot.sensors.iter_mut())
+            .find(|e| e.name == o.target)
+        {
+            let axis = POINT_KEYS
+                .iter()
+                .position(|k| *k == o.key)
+                .ok_or_else(|| unknown_key(&POINT_KEYS))?;
+            element.point[axis] = o.value;
+        } else if let Some(link) = robot.links.iter_mut().find(|l| l.name == o.target) {
+            if o.key != "mass" {
+                return Err(unknown_key(&["mass"]));
+            }
+            if o.value.is_nan() || o.value <= 0.0 {
+                return Err(scenario.error(&key_path, format!("must be > 0, got {}", o.value)));
+            }
+            if link.mass > 0.0 {
+                link.inertia *= o.value / link.mass;
+            }
+            link.mass = o.value;
+        } else {
+            return Err(scenario.error(
+                format!("overrides.{}", o.target),
+                format!(
+                    "no element or link named \"{}\" in {}",
+                    o.target,
+                    robot.file.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+use crate::lugre::LugreParams;
+
+/// Where a link ended up: which body, and the link frame in the body frame.
+#[derive(Debug, Clone, Copy)]
+struct Placement {
+    frame: Frame,
+    link_in_body: Isometry3<f64>,
+}
+
+struct Assembler<'a> {
+    robot: &'a RobotSpec,
+    scenario: &'a Scenario,
+    placements: HashMap<&'a str, Placement>,
+    bodies: Vec<Body>,
+    names: Vec<String>,
+    kinds: Vec<StateKind>,
+    nominal: Vec<f64>,
+}
+
+impl<'a> Assembler<'a> {
+    fn new(robot: &'a RobotSpec, scenario: &'a Scenario) -> Result<Self, LoadError> {
+        let mut assembler = Self {
+            robot,
+            scenario,
+            placements: HashMap::new(),
+            bodies: Vec::new(),
+            names: Vec::new(),
+            kinds: Vec::new(),
+            nominal: Vec::new(),
+        };
+        assembler.walk_tree()?;
+        Ok(assembler)
+    }
+
+    fn robot_error(&self, element: impl Into<String>, message: impl Into<String>) -> LoadError {
+        LoadError::robot(&self.robot.file, element, message)
+    }
+
+    /// Depth-first walk from `world`, merging fixed joints and creating bodies.
+    fn walk_tree(&mut self) -> Result<(), LoadError> {
+        let robot = self.robot;
+        if !robot.links.iter().any(|l| l.name == WORLD) {
+            return Err(self.robot_error(
+                format!("robot \"{}\"", robot.name),
+                "has no link named \"world\"; the tree must be rooted at a link \"world\"",
+            ));
+        }
+        let mut parent_joint: HashMap<&str, usize> = HashMap::new();
+        for (index, joint) in robot.joints.iter().enumerate() {
+            for (role, link) in [("parent", &joint.parent), ("child", &joint.child)] {
+                if !robot.links.iter().any(|l| &l.name == link) {
+                    return Err(self.robot_error(
+                        format!("joint \"{}\"", joint.name),
+                        format!("{role} link \"{link}\" does not exist"),
+                    ));
+                }
+            }
+            if joint.child == WORLD {
+                return Err(self.robot_error(
+                    format!("joint \"{}\"", joint.name),
+                    "\"world\" cannot be a child link",
+                ));
+            }
+            if let Some(other) = parent_joint.insert(joint.child.as_str(), index) {
+                return Err(self.robot_error(
+                    format!("link \"{}\"", joint.child),
+                    format!(
+                        "is the child of two joints, \"{}\" and \"{}\" (the links must form a tree)",
+                        robot.joints[other].name, joint.name
+                    ),
+                ));
+            }
+        }
+        self.placements.insert(
+            WORLD,
+            Placement {
+                frame: Frame::World,
+                link_in_body: Isometry3::identity(),
+            },
+        );
+        let mut stack = vec![WORLD];
+        let (mut q_offset, mut v_offset) = (0, 0);
+        while let Some(link) = stack.pop() {
+            let placement = self.placements[link];
+            // Reverse so that children are visited in file order.
+            for joint in robot.joints.iter().rev().filter(|j| j.parent == link) {
+                let origin_in_body = placement.link_in_body * joint.origin;
+                let child_placement = match joint.kind {
+                    JointKind::Fixed => Placement {
+                        frame: placement.frame,
+                        link_in_body: origin_in_body,
+                    },
+                    kind => {
+                        let motion = match kind {
+                            JointKind::Prismatic => JointMotion::Prismatic { axis: joint.axis },
+                            JointKind::Revolute => JointMotion::Revolute { axis: joint.axis },
+                            _ => JointMotion::Floating,
+                        };
+                        let parent = match placement.frame {
+                            Frame::World => None,
+                            Frame::Body(b) => Some(b),
+                        };
+                        let mut chain = parent
+                            .map(|p| self.bodies[p].chain.clone())
+                            .unwrap_or_default();
+                        chain.extend(v_offset..v_offset + motion.nv());
+                        self.bodies.push(Body {
+                            name: joint.child.clone(),
+                            links: Vec::new(),
+                            parent,
+                            joint: Joint {
+                                name: joint.name.clone(),
+                                motion,
+                                origin: origin_in_body,
+                                origin_rotation: *origin_in_body
+                                    .rotation
+                                    .to_rotation_matrix()
+                                    .matrix(),
+                                q_offset,
+                                v_offset,
+                            },
+                            mass: 0.0,
+                            com: Vector3::zeros(),
+                            inertia: Matrix3::zeros(),
+                            chain,
+                        });
+                        q_offset += motion.nq();
+                        v_offset += motion.nv();
+                        Placement {
+                            frame: Frame::Body(self.bodies.len() - 1),
+                            link_in_body: Isometry3::identity(),
+                        }
+                    }
+                };
+                self.placements
+                    .insert(joint.child.as_str(), child_placement);
+                stack.push(joint.child.as_str());
+            }
+        }
+        if let Some(orphan) = robot
+            .links
+            .iter()
+            .find(|l| !self.placements.contains_key(l.name.as_str()))
+        {
+            return Err(self.robot_error(
+                format!("link \"{}\"", orphan.name),
+                "is not connected to \"world\" through joints (or sits on a joint cycle)",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Sums the inertia of every link placed on each body.
+    fn merge_inertia(&mut self) -> Result<(), LoadError> {
+        struct Part {
+            mass: f64,
+            com: Vector3<f64>,
+            inertia: Matrix3<f64>,
+        }
+        let mut parts: Vec<Vec<Part>> = (0..self.bodies.len()).map(|_| Vec::new()).collect();
+        for link in &self.robot.links {
+            let placement = self.placements[link.name.as_str()];
+            let Frame::Body(body) = placement.frame else {
+                continue;
+            };
+            self.bodies[body].links.push(link.name.clone());
+            if link.mass == 0.0 {
+                continue;
+            }
+            let frame = placement.link_in_body * link.inertial_origin;
+            let rotation = frame.rotation.to_rotation_matrix();
+            parts[body].push(Part {
+                mass: link.mass,
+                com: frame.translation.vector,
+                inertia: rotation.matrix() * link.inertia * rotation.matrix().transpose(),
+            });
+        }
+        for (body, parts) in self.bodies.iter_mut().zip(parts) {
+            // Keep the body's own link first in the list.
+            if let Some(own) = body.links.iter().position(|l| *l == body.name) {
+                body.links.swap(0, own);
+            }
+            let mass: f64 = parts.iter().map(|p| p.mass).sum();
+            if mass <= 0.0 {
+                return Err(LoadError::robot(
+                    &self.robot.file,
+                    format!("link \"{}\"", body.name),
+                    format!(
+                        "moves on joint \"{}\" but has no mass (give it an <inertial> with mass > 0)",
+                        body.joint.name
+                    ),
+                ));
+            }
+            let com = parts.iter().map(|p| p.com * p.mass).sum::<Vector3<f64>>() / mass;
+            let inertia = parts
+                .iter()
+                .map(|p| {
+                    let d = p.com - com;
+                    p.inertia
+                        + p.mass * (Matrix3::identity() * d.norm_squared() - d * d.transpose())
+                })
+                .sum();
+            body.mass = mass;
+            body.com = com;
+            body.inertia = inertia;
+        }
+        Ok(())
+    }
+
+    fn push_state(&mut self, name: String, kind: StateKind, nominal: f64) {
+        self.names.push(name);
+        self.kinds.push(kind);
+        self.nominal.push(nominal);
+    }
+
+    /// Positions then velocities, body by body.
+    fn number_joint_states(&mut self) {
+        const LENGTH: f64 = 1e-3;
+        const SPEED: f64 = 1e-2;
+        const ANGLE: f64 = 1e-3;
+        const RATE: f64 = 1e-2;
+        let joints: Vec<(String, JointMotion)> = self
+            .bodies
+            .iter()
+            .map(|b| (b.joint.name.clone(), b.joint.motion))
+            .collect();
+        for (name, motion) in &joints {
+            match motion {
+                JointMotion::Prismatic { .. } => {
+                    self.push_state(format!("{name}.q"), StateKind::Translation, LENGTH)
+                }
+                JointMotion::Revolute { .. } => {
+                    self.push_state(format!("{name}.q"), StateKind::Angle, ANGLE)
+                }
+                JointMotion::Floating => {
+                    for axis in ["x", "y", "z"] {
+                        self.push_state(format!("{name}.{axis}"), StateKind::Translation, LENGTH);
+                    }
+                    for part in ["qw", "qx", "qy", "qz"] {
+                        self.push_state(format!("{name}.{part}"), StateKind::Quaternion, ANGLE);
+                    }
+                }
+            }
+        }
+        for (name, motion) in &joints {
+            match motion {
+                JointMotion::Prismatic { .. } => {
+                    self.push_state(format!("{name}.v"), StateKind::LinearVelocity, SPEED)
+                }
+                JointMotion::Revolute { .. } => {
+                    self.push_state(format!("{name}.v"), StateKind::AngularVelocity, RATE)
+                }
+                JointMotion::Floating => {
+                    for axis in ["vx", "vy", "vz"] {
+                        self.push_state(format!("{name}.{axis}"), StateKind::LinearVelocity, SPEED);
+                    }
+                    for axis in ["wx", "wy", "wz"] {
+                        self.push_state(format!("{name}.{axis}"), StateKind::AngularVelocity, RATE);
+                    }
+                }
+            }
+        }
+    }
+
+    fn resolve_link(&self, link: &str, element: &str) -> Result<Placement, LoadError> {
+        self.placements
+            .get(link)
+            .copied()
+            .ok_or_else(|| self.robot_error(element, format!("link \"{link}\" does not exist")))
+    }
+
+    /// A point/axis element on a moving body.
+    fn moving_point_axis(&self, spec: &PointAxisSpec, kind: &str) -> Result<PointAxis, LoadError> {
+        let element = format!("{kind} \"{}\"", spec.name);
+        let placement = self.resolve_link(&spec.link, &element)?;
+        let Frame::Body(body) = placement.frame else {
+            return Err(self.robot_error(
+                element,
+                format!(
+                    "link \"{}\" is welded to the world and cannot move",
+                    spec.link
+                ),
+            ));
+        };
+        let point = placement.link_in_body * nalgebra::Point3::from(spec.point);
+        let axis_in_body = placement.link_in_body.rotation * spec.axis;
+        let world = body_pose_at_zero(&self.bodies, body);
+        let axis = world.rotation * axis_in_body;
+        let zero_offset = (world * point).coords.dot(&axis);
+        Ok(PointAxis {
+            name: spec.name.clone(),
+            body,
+            point: point.coords,
+            axis,
+            zero_offset,
+        })
+    }
+
+    fn build(mut self) -> Result<Model, LoadError> {
+        self.merge_inertia()?;
+        self.number_joint_states();
+        let robot = self.robot;
+        let scenario = self.scenario;
+        let (nq, nv) = self.bodies.iter().fold((0, 0), |(q, v), b| {
+            (q + b.joint.motion.nq(), v + b.joint.motion.nv())
+        });
+
+        let mut frictions = Vec::new();
+        for spec in &robot.frictions {
+            let as_point = PointAxisSpec {
+                name: spec.name.clone(),
+                link: spec.link.clone(),
+                point: spec.point,
+                axis: spec.axis,
+            };
+            let resolved = self.moving_point_axis(&as_point, "friction")?;
+            let z_index = self.names.len();
+            self.push_state(
+                format!("{}.z", spec.name),
+                StateKind::Bristle,
+                spec.lugre.f_s / spec.lugre.sigma0,
+            );
+            frictions.push(FrictionContact {
+                name: spec.name.clone(),
+                body: resolved.body,
+                point: resolved.point,
+                axis: resolved.axis,
+                lugre: spec.lugre,
+                z_index,
+            });
+        }
+        let nz = frictions.len();
+
+        let mut isolators = Vec::new();
+        for spec in &robot.isolators {
+            let element = format!("isolator \"{}\"", spec.name);
+            let parent = self.resolve_link(&spec.parent, &element)?;
+            let child = self.resolve_link(&spec.child, &element)?;
+            if parent.frame == child.frame {
+                return Err(self.robot_error(
+                    element,
+                    format!(
+                        "links \"{}\" and \"{}\" belong to the same rigid body; the isolator would do nothing",
+                        spec.parent, spec.child
+                    ),
+                ));
+            }
+            let parent_attach = parent.link_in_body * spec.origin;
+            // The child attach frame coincides with the parent's at the zero configuration.
+            let attach_world = frame_pose_at_zero(&self.bodies, parent.frame) * parent_attach;
+            let child_attach =
+                frame_pose_at_zero(&self.bodies, child.frame).inverse() * attach_world;
+            isolators.push(Isolator {
+                name: spec.name.clone(),
+                parent: parent.frame,
+                child: child.frame,
+                parent_attach,
+                child_attach,
+                stiffness: spec.stiffness,
+                damping: spec.damping,
+                attach_rotations: [
+                    *parent_attach.rotation.to_rotation_matrix().matrix(),
+                    *child_attach.rotation.to_rotation_matrix().matrix(),
+                ],
+            });
+        }
+
+        let actuators = robot
+            .actuators
+            .iter()
+            .map(|a| self.moving_point_axis(a, "actuator"))
+            .collect::<Result<Vec<_>, _>>()?;
+        let sensors = robot
+            .sensors
+            .iter()
+            .map(|s| self.moving_point_axis(s, "sensor"))
+            .collect::<Result<Vec<_>, _>>()?;
+
+        let controller = match &scenario.controller {
+            None => None,
+            Some(settings) => {
+                let find = |list: &[PointAxis], name: &str, key: &str, kind: &str| {
+                    list.iter().position(|e| e.name == name).ok_or_else(|| {
+                        scenario.error(
+                            key,
+                            format!(
+                                "no {kind} named \"{name}\" in {} (have: {})",
+                                robot.file.display(),
+                                list.iter()
+                                    .map(|e| e.name.as_str())
+                                    .collect::<Vec<_>>()
+                                    .join(", ")
+                            ),
+                        )
+                    })
+                };
+                let sensor = find(&sensors, &settings.sensor, "controller.sensor", "sensor")?;
+                let actuator = find(
+                    &actuators,
+                    &settings.actuator,
+                    "controller.actuator",
+                    "actuator",
+                )?;
+                let integral_index = (settings.k_i > 0.0).then(|| {
+                    let index = self.names.len();
+                    self.push_state("controller.integral".into(), StateKind::ErrorIntegral, 1e-4);
+                    index
+                });
+                Some(Controller {
+                    sensor,
+                    actuator,
+                    k: settings.k,
+                    c: settings.c,
+                    k_i: settings.k_i,
+                    integral_index,
+                })
+            }
+        };
+
+        let layout = StateLayout {
+            names: self.names,
+            kinds: self.kinds,
+            nominal: self.nominal,
+            nq,
+            nv,
+            nz,
+        };
+        let mut model = Model {
+            name: robot.name.clone(),
+            bodies: self.bodies,
+            isolators,
+            frictions,
+            actuators,
+            sensors,
+            controller,
+            gravity: Vector3::from(scenario.gravity),
+            signals: Vec::new(),
+            layout,
+            constant_mass: None,
+            constant_mass_inverse: None,
+            translational: false,
+            translational_map: None,
+        };
+        model.signals = signal_list(&model);
+        check_mass_matrix(&mut model, &robot.file)?;
+        Ok(model)
+    }
+}
+
+/// World pose of a body in the zero configuration.
+fn body_pose_at_zero(bodies: &[Body], body: usize) -> Isometry3<f64> {
+    let own = bodies[body].joint.origin;
+    match bodies[body].parent {
+        Some(parent) => body_pose_at_zero(bodies, parent) * own,
+        None => own,
+    }
+}
+
+fn frame_pose_at_zero(bodies: &[Body], frame: Frame) -> Isometry3<f64> {
+    match frame {
+        Frame::World => Isometry3::identity(),
+        Frame::Body(b) => body_pose_at_zero(bodies, b),
+    }
+}
+
+/// Every output signal the model can write, in a fixed order.
+fn signal_list(model: &Model) -> Vec<SignalInfo> {
+    let mut signals = Vec::new();
+    let mut push = |name: String, unit: &'static str| signals.push(SignalInfo { name, unit });
+    for sensor in &model.sensors {
+        push(format!("{}.position", sensor.name), "m");
+        push(format!("{}.velocity", sensor.name), "m/s");
+    }
+    if model.controller.is_some() {
+        push("controller.reference".into(), "m");
+        push("controller.error".into(), "m");
+    }
+    for actuator in &model.actuators {
+        push(format!("{}.force", actuator.name), "N");
+    }
+    for body in &model.bodies {
+        let name = &body.joint.name;
+        match body.joint.motion {
+            JointMotion::Prismatic { .. } => {
+                push(format!("{name}.q"), "m");
+                push(format!("{name}.v"), "m/s");
+            }
+            JointMotion::Revolute { .. } => {
+                push(format!("{name}.q"), "rad");
+                push(format!("{name}.v"), "rad/s");
+            }
+            JointMotion::Floating => {
+                for axis in ["x", "y", "z"] {
+                    push(format!("{name}.{axis}"), "m");
+                }
+                for angle in ["roll", "pitch", "yaw"] {
+                    push(format!("{name}.{angle}"), "rad");
+                }
+                for axis in ["vx", "vy", "vz"] {
+                    push(format!("{name}.{axis}"), "m/s");
+                }
+                for axis in ["wx", "wy", "wz"] {
+                    push(format!("{name}.{axis}"), "rad/s");
+                }
+            }
+        }
+    }
+    for friction in &model.frictions {
+        push(format!("{}.force", friction.name), "N");
+        push(format!("{}.slip_velocity", friction.name), "m/s");
+        push(format!("{}.z", friction.name), "m");
+    }
+    for isolator in &model.isolators {
+        for axis in ["dx", "dy", "dz"] {
+            push(format!("{}.{axis}", isolator.name), "m");
+        }
+        for axis in ["rx", "ry", "rz"] {
+            push(format!("{}.{axis}", isolator.name), "rad");
+        }
+    }
+    signals
+}
+
+/// The mass matrix must be positive definite at the zero configuration (every
+/// degree of freedom carries mass or inertia); when no joint rotates a body it
+/// is constant and its factor is kept.
+fn check_mass_matrix(model: &mut Model, file: &Path) -> Result<(), LoadError> {
+    let x = model.zero_state();
+    let mass = dynamics::mass_matrix(model, &x);
+    let Some(factor) = mass.clone().cholesky() else {
+        let weak = (0..mass.nrows())
+            .min_by(|&a, &b| mass[(a, a)].total_cmp(&mass[(b, b)]))
+            .unwrap_or(0);
+        let body = model
+            .bodies
+            .iter()
+            .find(|b| (b.joint.v_offset..b.joint.v_offset + b.joint.motion.nv()).contains(&weak))
+            .map(|b| b.name.clone())
+            .unwrap_or_default();
+        return Err(LoadError::robot(
+            file,
+            format!("link \"{body}\""),
+            "the mass matrix is singular: a degree of freedom has no mass or inertia (check the <inertia> of this link)",
+        ));
+    };
+    if model.bodies.iter().all(|b| !b.joint.motion.rotates()) {
+        model.constant_mass_inverse = Some(factor.inverse());
+        model.constant_mass = Some(factor);
+        model.translational = true;
+        let inverse = model.constant_mass_inverse.clone().unwrap_or_default();
+        model.translational_map = Some(crate::translational::TranslationalMap::build(
+            model, &inverse,
+        ));
+    }
+    Ok(())
+}

@@ -1,0 +1,632 @@
+//! The model's physics: forward kinematics, force elements (isolator bushings,
+//! LuGre contacts, actuator, sensor, PID servo), the joint-space equations of
+//! motion `M(q) v' = tau(q, v, inputs)`, the state derivative, output signals and
+//! stored energy.
+//!
+//! Rigid-body dynamics are written in world coordinates: a forward pass gives
+//! each body's pose, twist and velocity-product ("bias") accelerations; force
+//! elements add external wrenches (moments about the world origin); a backward
+//! pass sums the wrench every joint must transmit when joint accelerations are
+//! zero, whose projection on the joint axes is `-tau`. The mass matrix comes from
+//! body Jacobians. Every joint is a set of unit axes, linear or angular: a
+//! prismatic joint is one linear axis, a revolute joint one angular axis, a
+//! floating joint three of each.
+
+use nalgebra::{DMatrix, DVector, Matrix3, Quaternion, Rotation3, UnitQuaternion, Vector3};
+
+use crate::model::{Frame, Inputs, JointMotion, Model};
+use crate::reference::ReferenceSample;
+
+/// Scratch space for evaluating a model without allocating. One per thread.
+#[derive(Debug, Clone)]
+pub struct Workspace {
+    rotation: Vec<Matrix3<f64>>,
+    origin: Vec<Vector3<f64>>,
+    omega: Vec<Vector3<f64>>,
+    velocity: Vec<Vector3<f64>>,
+    bias_alpha: Vec<Vector3<f64>>,
+    bias_accel: Vec<Vector3<f64>>,
+    dof_axis: Vec<Vector3<f64>>,
+    dof_center: Vec<Vector3<f64>>,
+    dof_angular: Vec<bool>,
+    force: Vec<Vector3<f64>>,
+    moment: Vec<Vector3<f64>>,
+    jacobian: Vec<(Vector3<f64>, Vector3<f64>)>,
+    mass: DMatrix<f64>,
+    tau: DVector<f64>,
+    scratch: DVector<f64>,
+    pub(crate) generalized: Vec<f64>,
+    /// Per-element results of the last evaluation.
+    pub elements: ElementValues,
+}
+
+/// Values of the force elements at the last evaluated state.
+#[derive(Debug, Clone, Default)]
+pub struct ElementValues {
+    /// LuGre friction force per contact (positive opposes positive sliding), N.
+    pub friction_force: Vec<f64>,
+    /// Sliding velocity per contact, m/s.
+    pub slip_velocity: Vec<f64>,
+    /// Bristle rate z' per contact, m/s.
+    pub z_rate: Vec<f64>,
+    /// Force per actuator, N.
+    pub actuator_force: Vec<f64>,
+    /// Reading per sensor, m.
+    pub sensor_position: Vec<f64>,
+    /// Rate per sensor, m/s.
+    pub sensor_velocity: Vec<f64>,
+    /// Deflection per isolator: translation (m) then rotation vector (rad), attach axes.
+    pub isolator_deflection: Vec<[f64; 6]>,
+    /// Deflection rate per isolator.
+    pub isolator_rate: Vec<[f64; 6]>,
+    /// Reference used by the controller.
+    pub reference: ReferenceSample,
+    /// Tracking error x - x_r of the controller, m.
+    pub tracking_error: f64,
+}
+
+impl Model {
+    /// A workspace sized for this model.
+    pub fn workspace(&self) -> Workspace {
+        let nb = self.bodies.len();
+        let nv = self.layout.nv;
+        let zeros = || vec![Vector3::zeros(); nb];
+        let mut dof_angular = vec![false; nv];
+        for body in &self.bodies {
+            let v0 = body.joint.v_offset;
+            match body.joint.motion {
+                JointMotion::Prismatic { .. } => {}
+                JointMotion::Revolute { .. } => dof_angular[v0] = true,
+                JointMotion::Floating => dof_angular[v0 + 3..v0 + 6].fill(true),
+            }
+        }
+        Workspace {
+            rotation: vec![Matrix3::identity(); nb],
+            origin: zeros(),
+            omega: zeros(),
+            velocity: zeros(),
+            bias_alpha: zeros(),
+            bias_accel: zeros(),
+            dof_axis: vec![Vector3::zeros(); nv],
+            dof_center: vec![Vector3::zeros(); nv],
+            dof_angular,
+            force: zeros(),
+            moment: zeros(),
+            jacobian: Vec::with_capacity(nv),
+            mass: DMatrix::zeros(nv, nv),
+            tau: DVector::zeros(nv),
+            scratch: DVector::zeros(nv),
+            generalized: vec![0.0; nv],
+            elements: ElementValues {
+                friction_force: vec![0.0; self.frictions.len()],
+                slip_velocity: vec![0.0; self.frictions.len()],
+                z_rate: vec![0.0; self.frictions.len()],
+                actuator_force: vec![0.0; self.actuators.len()],
+                sensor_position: vec![0.0; self.sensors.len()],
+                sensor_velocity: vec![0.0; self.sensors.len()],
+                isolator_deflection: vec![[0.0; 6]; self.isolators.len()],
+                isolator_rate: vec![[0.0; 6]; self.isolators.len()],
+                reference: ReferenceSample::default(),
+                tracking_error: 0.0,
+            },
+        }
+    }
+
+    /// State derivative `dx = f(x, u)`. `x` and `dx` have [`Model::n_states`] entries.
+    /// Models without rotating joints take the exact constant-Jacobian path of
+    /// [`crate::translational`]; [`Model::rhs_general`] is the general path.
+    pub fn rhs(&self, x: &[f64], inputs: &Inputs, dx: &mut [f64], ws: &mut Workspace) {
+        match &self.translational_map {
+            Some(map) => map.rhs(self, x, inputs, dx, ws),
+            None => self.rhs_general(x, inputs, dx, ws),
+        }
+    }
+
+    /// State derivative by the general recursive dynamics, for any model.
+    pub fn rhs_general(&self, x: &[f64], inputs: &Inputs, dx: &mut [f64], ws: &mut Workspace) {
+        self.evaluate(x, inputs, ws);
+        self.position_rates(x, dx);
+        self.accelerations(ws);
+        let nq = self.layout.nq;
+        let nv = self.layout.nv;
+        dx[nq..nq + nv].copy_from_slice(ws.tau.as_slice());
+        for (friction, rate) in self.frictions.iter().zip(&ws.elements.z_rate) {
+            dx[friction.z_index] = *rate;
+        }
+        if let Some(index) = self.controller.as_ref().and_then(|c| c.integral_index) {
+            dx[index] = ws.elements.tracking_error;
+        }
+    }
+
+    /// Kinematics and force elements at state x; results stay in `ws`.
+    pub fn evaluate(&self, x: &[f64], inputs: &Inputs, ws: &mut Workspace) {
+        self.kinematics(x, ws);
+        ws.force.fill(Vector3::zeros());
+        ws.moment.fill(Vector3::zeros());
+        self.isolator_forces(ws);
+        self.friction_forces(x, inputs, ws);
+        self.sensors_and_servo(x, inputs, ws);
+    }
+
+    /// Writes every output signal (see [`Model::signals`]) at state x.
+    pub fn outputs(&self, x: &[f64], inputs: &Inputs, out: &mut [f64], ws: &mut Workspace) {
+        self.evaluate(x, inputs, ws);
+        let e = &ws.elements;
+        let mut k = 0;
+        let mut put = |value: f64| {
+            out[k] = value;
+            k += 1;
+        };
+        for (p, v) in e.sensor_position.iter().zip(&e.sensor_velocity) {
+            put(*p);
+            put(*v);
+        }
+        if self.controller.is_some() {
+            put(e.reference.position);
+            put(e.tracking_error);
+        }
+        for f in &e.actuator_force {
+            put(*f);
+        }
+        let nq = self.layout.nq;
+        for body in &self.bodies {
+            let (q0, v0) = (body.joint.q_offset, nq + body.joint.v_offset);
+            match body.joint.motion {
+                JointMotion::Prismatic { .. } | JointMotion::Revolute { .. } => {
+                    put(x[q0]);
+                    put(x[v0]);
+                }
+                JointMotion::Floating => {
+                    (0..3).for_each(|i| put(x[q0 + i]));
+                    let (roll, pitch, yaw) = quaternion_at(x, q0 + 3).euler_angles();
+                    [roll, pitch, yaw].into_iter().for_each(&mut put);
+                    (0..6).for_each(|i| put(x[v0 + i]));
+                }
+            }
+        }
+        for i in 0..self.frictions.len() {
+            put(e.friction_force[i]);
+            put(e.slip_velocity[i]);
+            put(x[self.frictions[i].z_index]);
+        }
+        for deflection in &e.isolator_deflection {
+            deflection.iter().for_each(|d| put(*d));
+        }
+    }
+
+    /// Kinetic energy + isolator springs + bristle springs sigma0 z^2 / 2 +
+    /// gravitational potential (relative to the world origin), J. With no servo
+    /// and no platform motion this never increases.
+    pub fn stored_energy(&self, x: &[f64], ws: &mut Workspace) -> f64 {
+        self.evaluate(x, &Inputs::default(), ws);
+        let mut energy = 0.0;
+        for (i, body) in self.bodies.iter().enumerate() {
+            let r = ws.rotation[i] * body.com;
+            let v_com = ws.velocity[i] + ws.omega[i].cross(&r);
+            let inertia = ws.rotation[i] * body.inertia * ws.rotation[i].transpose();
+            energy += 0.5 * body.mass * v_com.norm_squared()
+                + 0.5 * ws.omega[i].dot(&(inertia * ws.omega[i]))
+                - body.mass * self.gravity.dot(&(ws.origin[i] + r));
+        }
+        for (isolator, d) in self.isolators.iter().zip(&ws.elements.isolator_deflection) {
+            energy += (0..6)
+                .map(|a| 0.5 * isolator.stiffness[a] * d[a] * d[a])
+                .sum::<f64>();
+        }
+        for friction in &self.frictions {
+            let z = x[friction.z_index];
+            energy += 0.5 * friction.lugre.sigma0 * z * z;
+        }
+        energy
+    }
+
+    /// Forward pass: poses, twists, bias accelerations and joint axes in world coordinates.
+    fn kinematics(&self, x: &[f64], ws: &mut Workspace) {
+        let nq = self.layout.nq;
+        for (i, body) in self.bodies.iter().enumerate() {
+            let (
+                parent_rotation,
+                parent_origin,
+                parent_omega,
+                parent_velocity,
+                parent_alpha,
+                parent_accel,
+            ) = match body.parent {
+                Some(p) => (
+                    ws.rotation[p],
+                    ws.origin[p],
+                    ws.omega[p],
+                    ws.velocity[p],
+                    ws.bias_alpha[p],
+                    ws.bias_accel[p],
+                ),
+                None => (
+                    Matrix3::identity(),
+                    Vector3::zeros(),
+                    Vector3::zeros(),
+                    Vector3::zeros(),
+                    Vector3::zeros(),
+                    Vector3::zeros(),
+                ),
+            };
+            let joint = &body.joint;
+            let joint_rotation = parent_rotation * joint.origin_rotation;
+            let joint_origin = parent_origin + parent_rotation * joint.origin.translation.vector;
+            let (q0, v0) = (joint.q_offset, joint.v_offset);
+            let mut linear_rate = Vector3::zeros();
+            let mut angular_rate = Vector3::zeros();
+            let (rotation, origin) = match joint.motion {
+                JointMotion::Prismatic { axis } => {
+                    let s = joint_rotation * axis;
+                    ws.dof_axis[v0] = s;
+                    linear_rate = s * x[nq + v0];
+                    (joint_rotation, joint_origin + s * x[q0])
+                }
+                JointMotion::Revolute { axis } => {
+                    let s = joint_rotation * axis;
+                    ws.dof_axis[v0] = s;
+                    ws.dof_center[v0] = joint_origin;
+                    angular_rate = s * x[nq + v0];
+                    let turn =
+                        Rotation3::from_axis_angle(&nalgebra::Unit::new_unchecked(axis), x[q0]);
+                    (joint_rotation * turn.matrix(), joint_origin)
+                }
+                JointMotion::Floating => {
+                    let offset = Vector3::new(x[q0], x[q0 + 1], x[q0 + 2]);
+                    let origin = joint_origin + joint_rotation * offset;
+                    let attitude = quaternion_at(x, q0 + 3).to_rotation_matrix();
+                    for k in 0..3 {
+                        let s = joint_rotation.column(k).into_owned();
+                        ws.dof_axis[v0 + k] = s;
+                        ws.dof_axis[v0 + 3 + k] = s;
+                        ws.dof_center[v0 + 3 + k] = origin;
+                        linear_rate += s * x[nq + v0 + k];
+                        angular_rate += s * x[nq + v0 + 3 + k];
+                    }
+                    (joint_rotation * attitude.matrix(), origin)
+                }
+            };
+            let r = origin - parent_origin;
+            ws.rotation[i] = rotation;
+            ws.origin[i] = origin;
+            ws.omega[i] = parent_omega + angular_rate;
+            ws.velocity[i] = parent_velocity + parent_omega.cross(&r) + linear_rate;
+            ws.bias_alpha[i] = parent_alpha + parent_omega.cross(&angular_rate);
+            ws.bias_accel[i] = parent_accel
+                + parent_alpha.cross(&r)
+                + parent_omega.cross(&parent_omega.cross(&r))
+                + 2.0 * parent_omega.cross(&linear_rate);
+        }
+    }
+
+    /// World position and velocity of a point given in a body frame.
+    fn point_state(
+        &self,
+        frame: Frame,
+        point: &Vector3<f64>,
+        ws: &Workspace,
+    ) -> (Vector3<f64>, Vector3<f64>) {
+        match frame {
+            Frame::World => (*point, Vector3::zeros()),
+            Frame::Body(b) => {
+                let r = ws.rotation[b] * point;
+                (ws.origin[b] + r, ws.velocity[b] + ws.omega[b].cross(&r))
+            }
+        }
+    }
+
+    fn frame_rotation(&self, frame: Frame, ws: &Workspace) -> Matrix3<f64> {
+        match frame {
+            Frame::World => Matrix3::identity(),
+            Frame::Body(b) => ws.rotation[b],
+        }
+    }
+
+    fn frame_omega(&self, frame: Frame, ws: &Workspace) -> Vector3<f64> {
+        match frame {
+            Frame::World => Vector3::zeros(),
+            Frame::Body(b) => ws.omega[b],
+        }
+    }
+
+    fn isolator_forces(&self, ws: &mut Workspace) {
+        for (k, isolator) in self.isolators.iter().enumerate() {
+            let parent_rotation =
+                self.frame_rotation(isolator.parent, ws) * isolator.attach_rotations[0];
+            let child_rotation =
+                self.frame_rotation(isolator.child, ws) * isolator.attach_rotations[1];
+            let (parent_point, _) = self.point_state(
+                isolator.parent,
+                &isolator.parent_attach.translation.vector,
+                ws,
+            );
+            let (child_point, child_point_velocity) = self.point_state(
+                isolator.child,
+                &isolator.child_attach.translation.vector,
+                ws,
+            );
+            // Velocity of the parent's material point that coincides with the child attach point.
+            let parent_velocity_there = match isolator.parent {
+                Frame::World => Vector3::zeros(),
+                Frame::Body(b) => ws.velocity[b] + ws.omega[b].cross(&(child_point - ws.origin[b])),
+            };
+            let to_local = parent_rotation.transpose();
+            let translation = to_local * (child_point - parent_point);
+            let translation_rate = to_local * (child_point_velocity - parent_velocity_there);
+            let rotation = rotation_log(&(to_local * child_rotation));
+            let rotation_rate = to_local
+                * (self.frame_omega(isolator.child, ws) - self.frame_omega(isolator.parent, ws));
+            let (k_, c_) = (&isolator.stiffness, &isolator.damping);
+            let law = |axis: usize, d: f64, rate: f64| bushing_force(k_[axis], c_[axis], d, rate);
+            let local_force = Vector3::new(
+                law(0, translation.x, translation_rate.x),
+                law(1, translation.y, translation_rate.y),
+                law(2, translation.z, translation_rate.z),
+            );
+            let local_torque = Vector3::new(
+                law(3, rotation.x, rotation_rate.x),
+                law(4, rotation.y, rotation_rate.y),
+                law(5, rotation.z, rotation_rate.z),
+            );
+            let force = parent_rotation * local_force;
+            let torque = parent_rotation * local_torque;
+            apply_wrench(ws, isolator.child, &child_point, &force, &torque);
+            apply_wrench(ws, isolator.parent, &child_point, &-force, &-torque);
+            ws.elements.isolator_deflection[k] = [
+                translation.x,
+                translation.y,
+                translation.z,
+                rotation.x,
+                rotation.y,
+                rotation.z,
+            ];
+            ws.elements.isolator_rate[k] = [
+                translation_rate.x,
+                translation_rate.y,
+                translation_rate.z,
+                rotation_rate.x,
+                rotation_rate.y,
+                rotation_rate.z,
+            ];
+        }
+    }
+
+    fn friction_forces(&self, x: &[f64], inputs: &Inputs, ws: &mut Workspace) {
+        for (k, friction) in self.frictions.iter().enumerate() {
+            let frame = Frame::Body(friction.body);
+            let (point, point_velocity) = self.point_state(frame, &friction.point, ws);
+            let slip = point_velocity.dot(&friction.axis) - inputs.platform_velocity;
+            let (force, z_rate) = friction.lugre.force_and_z_rate(slip, x[friction.z_index]);
+            apply_wrench(
+                ws,
+                frame,
+                &point,
+                &(-force * friction.axis),
+                &Vector3::zeros(),
+            );
+            ws.elements.friction_force[k] = force;
+            ws.elements.slip_velocity[k] = slip;
+            ws.elements.z_rate[k] = z_rate;
+        }
+    }
+
+    fn sensors_and_servo(&self, x: &[f64], inputs: &Inputs, ws: &mut Workspace) {
+        for (k, sensor) in self.sensors.iter().enumerate() {
+            let (point, velocity) = self.point_state(Frame::Body(sensor.body), &sensor.point, ws);
+            ws.elements.sensor_position[k] = point.dot(&sensor.axis) - sensor.zero_offset;
+            ws.elements.sensor_velocity[k] = velocity.dot(&sensor.axis);
+        }
+        servo_force(self, x, inputs, &mut ws.elements);
+        for (k, actuator) in self.actuators.iter().enumerate() {
+            let frame = Frame::Body(actuator.body);
+            let (point, _) = self.point_state(frame, &actuator.point, ws);
+            let force = ws.elements.actuator_force[k] * actuator.axis;
+            apply_wrench(ws, frame, &point, &force, &Vector3::zeros());
+        }
+    }
+
+    /// Backward pass and solve: leaves the joint accelerations in `ws.tau`.
+    fn accelerations(&self, ws: &mut Workspace) {
+        let nb = self.bodies.len();
+        // Wrench each body needs from its joint for zero joint accelerations.
+        for i in 0..nb {
+            let body = &self.bodies[i];
+            let r = ws.rotation[i] * body.com;
+            let com = ws.origin[i] + r;
+            let omega = ws.omega[i];
+            let alpha = ws.bias_alpha[i];
+            let accel_com = ws.bias_accel[i] + alpha.cross(&r) + omega.cross(&omega.cross(&r));
+            let inertial_force = body.mass * (accel_com - self.gravity);
+            let mut inertial_moment = com.cross(&inertial_force);
+            if !self.translational {
+                let inertia = ws.rotation[i] * body.inertia * ws.rotation[i].transpose();
+                inertial_moment += inertia * alpha + omega.cross(&(inertia * omega));
+            }
+            ws.force[i] = inertial_force - ws.force[i];
+            ws.moment[i] = inertial_moment - ws.moment[i];
+        }
+        for i in (0..nb).rev() {
+            let body = &self.bodies[i];
+            let (force, moment) = (ws.force[i], ws.moment[i]);
+            let v0 = body.joint.v_offset;
+            for dof in v0..v0 + body.joint.motion.nv() {
+                let s = ws.dof_axis[dof];
+                ws.tau[dof] = -if ws.dof_angular[dof] {
+                    s.dot(&(moment - ws.dof_center[dof].cross(&force)))
+                } else {
+                    s.dot(&force)
+                };
+            }
+            if let Some(p) = body.parent {
+                ws.force[p] += force;
+                ws.moment[p] += moment;
+            }
+        }
+        match &self.constant_mass_inverse {
+            Some(inverse) => {
+                let nv = self.layout.nv;
+                ws.scratch.copy_from(&ws.tau);
+                for row in 0..nv {
+                    ws.tau[row] = (0..nv)
+                        .map(|col| inverse[(row, col)] * ws.scratch[col])
+                        .sum();
+                }
+            }
+            None => {
+                fill_mass_matrix(self, ws);
+                let mass = std::mem::replace(&mut ws.mass, DMatrix::zeros(0, 0));
+                match mass.cholesky() {
+                    Some(factor) => {
+                        factor.solve_mut(&mut ws.tau);
+                        ws.mass = factor.unpack();
+                    }
+                    None => {
+                        // Singular only for degenerate configurations: make it visible.
+                        ws.tau.fill(f64::NAN);
+                        ws.mass = DMatrix::zeros(self.layout.nv, self.layout.nv);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Position-coordinate rates: joint velocities, and quaternion rates for floating joints.
+    fn position_rates(&self, x: &[f64], dx: &mut [f64]) {
+        let nq = self.layout.nq;
+        for body in &self.bodies {
+            let (q0, v0) = (body.joint.q_offset, nq + body.joint.v_offset);
+            match body.joint.motion {
+                JointMotion::Prismatic { .. } | JointMotion::Revolute { .. } => dx[q0] = x[v0],
+                JointMotion::Floating => {
+                    dx[q0..q0 + 3].copy_from_slice(&x[v0..v0 + 3]);
+                    let q = Quaternion::new(x[q0 + 3], x[q0 + 4], x[q0 + 5], x[q0 + 6]);
+                    let w = Quaternion::new(0.0, x[v0 + 3], x[v0 + 4], x[v0 + 5]);
+                    let rate = (w * q) * 0.5;
+                    dx[q0 + 3] = rate.w;
+                    dx[q0 + 4] = rate.i;
+                    dx[q0 + 5] = rate.j;
+                    dx[q0 + 6] = rate.k;
+                }
+            }
+        }
+    }
+}
+
+/// The unit quaternion stored at `x[start..start + 4]` as (w, x, y, z), normalised.
+pub fn quaternion_at(x: &[f64], start: usize) -> UnitQuaternion<f64> {
+    UnitQuaternion::from_quaternion(Quaternion::new(
+        x[start],
+        x[start + 1],
+        x[start + 2],
+        x[start + 3],
+    ))
+}
+
+/// Bushing law along one attach axis: force (or torque) on the child.
+#[inline]
+pub(crate) fn bushing_force(stiffness: f64, damping: f64, deflection: f64, rate: f64) -> f64 {
+    -(stiffness * deflection + damping * rate)
+}
+
+/// PID servo law: writes the actuator forces and the tracking error from the
+/// sensor readings already in `elements`. The external servo force input is added
+/// to the controller's actuator (to the first actuator when there is no controller).
+pub(crate) fn servo_force(model: &Model, x: &[f64], inputs: &Inputs, elements: &mut ElementValues) {
+    elements.actuator_force.fill(0.0);
+    elements.reference = inputs.reference;
+    let servo_actuator = match &model.controller {
+        Some(controller) => {
+            let error = elements.sensor_position[controller.sensor] - inputs.reference.position;
+            let error_rate =
+                elements.sensor_velocity[controller.sensor] - inputs.reference.velocity;
+            let integral = controller.integral_index.map_or(0.0, |i| x[i]);
+            elements.tracking_error = error;
+            elements.actuator_force[controller.actuator] =
+                -(controller.k * error + controller.c * error_rate + controller.k_i * integral);
+            Some(controller.actuator)
+        }
+        None => (!model.actuators.is_empty()).then_some(0),
+    };
+    if let Some(a) = servo_actuator {
+        elements.actuator_force[a] += inputs.servo_force;
+    }
+}
+
+/// The rotation vector (axis times angle) of a rotation matrix.
+fn rotation_log(r: &Matrix3<f64>) -> Vector3<f64> {
+    let skew = 0.5
+        * Vector3::new(
+            r[(2, 1)] - r[(1, 2)],
+            r[(0, 2)] - r[(2, 0)],
+            r[(1, 0)] - r[(0, 1)],
+        );
+    let sin = skew.norm();
+    let cos = 0.5 * (r.trace() - 1.0);
+    if sin < 1e-6 {
+        // angle / sin(angle) = 1 + angle^2 / 6 + ...
+        return skew * (1.0 + sin * sin / 6.0);
+    }
+    if cos > -0.99 {
+        return skew * (sin.atan2(cos) / sin);
+    }
+    // Near half a turn the skew part loses the axis: fall back to the quaternion.
+    Rotation3::from_matrix_unchecked(*r).scaled_axis()
+}
+
+fn apply_wrench(
+    ws: &mut Workspace,
+    frame: Frame,
+    point: &Vector3<f64>,
+    force: &Vector3<f64>,
+    torque: &Vector3<f64>,
+) {
+    if let Frame::Body(b) = frame {
+        ws.force[b] += force;
+        ws.moment[b] += point.cross(force) + torque;
+    }
+}
+
+impl Workspace {
+    /// World velocity of a point (body frame coordinates) after [`Model::evaluate`].
+    pub(crate) fn point_velocity(&self, body: usize, point: &Vector3<f64>) -> Vector3<f64> {
+        self.velocity[body] + self.omega[body].cross(&(self.rotation[body] * point))
+    }
+}
+
+/// Joint-space mass matrix from body Jacobians: `sum m Jv^T Jv + Jw^T I Jw`.
+fn fill_mass_matrix(model: &Model, ws: &mut Workspace) {
+    ws.mass.fill(0.0);
+    for (i, body) in model.bodies.iter().enumerate() {
+        let com = ws.origin[i] + ws.rotation[i] * body.com;
+        let inertia = ws.rotation[i] * body.inertia * ws.rotation[i].transpose();
+        ws.jacobian.clear();
+        for &dof in &body.chain {
+            let s = ws.dof_axis[dof];
+            ws.jacobian.push(if ws.dof_angular[dof] {
+                (s.cross(&(com - ws.dof_center[dof])), s)
+            } else {
+                (s, Vector3::zeros())
+            });
+        }
+        for (a, &row) in body.chain.iter().enumerate() {
+            let (va, wa) = ws.jacobian[a];
+            let inertia_wa = inertia * wa;
+            for (b, &col) in body.chain.iter().enumerate().skip(a) {
+                let (vb, wb) = ws.jacobian[b];
+                let entry = body.mass * va.dot(&vb) + wb.dot(&inertia_wa);
+                ws.mass[(row, col)] += entry;
+                if b != a {
+                    ws.mass[(col, row)] += entry;
+                }
+            }
+        }
+    }
+}
+
+/// The joint-space mass matrix at state x (positions are read from x).
+pub fn mass_matrix(model: &Model, x: &[f64]) -> DMatrix<f64> {
+    let mut ws = model.workspace();
+    model.kinematics(x, &mut ws);
+    fill_mass_matrix(model, &mut ws);
+    ws.mass
+}

@@ -1,0 +1,28 @@
+//! fistage-model: robot (URDF) and scenario (TOML) files turned into an immutable,
+//! validated [`Model`] of a precision stage, and the model's physics: state layout,
+//! right-hand side `dx = f(x, u)`, outputs and stored energy.
+//!
+//! Data flow: [`RobotSpec`] + [`Scenario`] → [`assemble`] → [`Model`], evaluated
+//! with a per-thread [`Workspace`].
+
+pub mod assembly;
+pub mod dynamics;
+pub mod error;
+pub mod lugre;
+pub mod model;
+pub mod reference;
+pub mod robot;
+pub mod scenario;
+mod translational;
+
+pub use assembly::{Loaded, assemble, load};
+pub use dynamics::{ElementValues, Workspace};
+pub use error::LoadError;
+pub use lugre::{InvalidLugreParameter, LugreParams};
+pub use model::{
+    Body, Controller, Frame, FrictionContact, Inputs, Isolator, Joint, JointMotion, Model,
+    PointAxis, SignalInfo, StateKind, StateLayout,
+};
+pub use reference::{Reference, ReferenceSample};
+pub use robot::{FISTAGE_NS, RobotSpec};
+pub use scenario::{ControllerSettings, Override, Scenario, SolverSettings};

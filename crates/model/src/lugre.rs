@@ -1,0 +1,236 @@
+//! LuGre friction at one contact: parameters, validation, bristle dynamics,
+//! friction force and the steady-state (Stribeck) curve.
+//!
+//! With `v` the sliding velocity of the contact relative to its counter-surface:
+//!
+//! ```text
+//! sigma0 * g(v) = f_c + (f_s - f_c) * exp(-(v / v_s)^2)
+//! z'  = v - |v| / g(v) * z
+//! f_f = sigma0 * z + sigma1 * z' + sigma2 * v
+//! ```
+//!
+//! The steady state of a contact sliding at constant `v` is
+//! `f_ss(v) = [f_c + (f_s - f_c) exp(-(v/v_s)^2)] sgn(v) + sigma2 v` (paper Eq. 30).
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+/// A LuGre parameter that violates its physical requirement.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[error("{name} must be {requirement}, got {value}")]
+pub struct InvalidLugreParameter {
+    /// Parameter name as used in files (`sigma0`, `f_c`, ...).
+    pub name: &'static str,
+    /// The offending value.
+    pub value: f64,
+    /// The requirement in words, e.g. `> 0` or `>= f_c (6.5)`.
+    pub requirement: String,
+}
+
+/// The six LuGre parameters of one contact, SI units.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct LugreParams {
+    /// Bristle stiffness sigma0, N/m.
+    pub sigma0: f64,
+    /// Bristle (micro) damping sigma1, N s/m.
+    pub sigma1: f64,
+    /// Viscous friction sigma2, N s/m.
+    pub sigma2: f64,
+    /// Coulomb friction level f_C, N.
+    pub f_c: f64,
+    /// Static (breakaway) friction level f_S, N.
+    pub f_s: f64,
+    /// Stribeck velocity v_s, m/s.
+    pub v_s: f64,
+}
+
+impl LugreParams {
+    /// Names of the parameters in file order.
+    pub const NAMES: [&'static str; 6] = ["sigma0", "sigma1", "sigma2", "f_c", "f_s", "v_s"];
+
+    /// The identified bearing of the source paper, Table 1.
+    pub const fn paper_table1() -> Self {
+        Self {
+            sigma0: 2.2e6,
+            sigma1: 237.0,
+            sigma2: 14.2,
+            f_c: 5.1,
+            f_s: 6.5,
+            v_s: 16.7e-3,
+        }
+    }
+
+    /// Checks sigma0 > 0, f_s >= f_c > 0, v_s > 0, sigma1 >= 0, sigma2 >= 0, all finite.
+    pub fn validate(&self) -> Result<(), InvalidLugreParameter> {
+        let bad = |name, value, requirement: &str| InvalidLugreParameter {
+            name,
+            value,
+            requirement: requirement.to_string(),
+        };
+        for (name, value) in Self::NAMES.iter().zip(self.values()) {
+            if !value.is_finite() {
+                return Err(bad(name, value, "finite"));
+            }
+        }
+        if self.sigma0 <= 0.0 {
+            return Err(bad("sigma0", self.sigma0, "> 0"));
+        }
+        if self.sigma1 < 0.0 {
+            return Err(bad("sigma1", self.sigma1, ">= 0"));
+        }
+        if self.sigma2 < 0.0 {
+            return Err(bad("sigma2", self.sigma2, ">= 0"));
+        }
+        if self.f_c <= 0.0 {
+            return Err(bad("f_c", self.f_c, "> 0"));
+        }
+        if self.f_s < self.f_c {
+            return Err(InvalidLugreParameter {
+                name: "f_s",
+                value: self.f_s,
+                requirement: format!(">= f_c ({})", self.f_c),
+            });
+        }
+        if self.v_s <= 0.0 {
+            return Err(bad("v_s", self.v_s, "> 0"));
+        }
+        Ok(())
+    }
+
+    /// The parameters in the order of [`Self::NAMES`].
+    pub fn values(&self) -> [f64; 6] {
+        [
+            self.sigma0,
+            self.sigma1,
+            self.sigma2,
+            self.f_c,
+            self.f_s,
+            self.v_s,
+        ]
+    }
+
+    /// Mutable access by file name, for overrides and parameter sweeps.
+    pub fn get_mut(&mut self, name: &str) -> Option<&mut f64> {
+        match name {
+            "sigma0" => Some(&mut self.sigma0),
+            "sigma1" => Some(&mut self.sigma1),
+            "sigma2" => Some(&mut self.sigma2),
+            "f_c" => Some(&mut self.f_c),
+            "f_s" => Some(&mut self.f_s),
+            "v_s" => Some(&mut self.v_s),
+            _ => None,
+        }
+    }
+
+    /// Stribeck level `f_c + (f_s - f_c) exp(-(v/v_s)^2)`, N (always > 0).
+    #[inline]
+    pub fn stribeck_level(&self, v: f64) -> f64 {
+        let r = v / self.v_s;
+        self.f_c + (self.f_s - self.f_c) * (-r * r).exp()
+    }
+
+    /// `g(v)`, the steady bristle deflection magnitude at velocity v, m.
+    #[inline]
+    pub fn g(&self, v: f64) -> f64 {
+        self.stribeck_level(v) / self.sigma0
+    }
+
+    /// Bristle rate `z' = v - |v| / g(v) * z`, m/s.
+    #[inline]
+    pub fn z_rate(&self, v: f64, z: f64) -> f64 {
+        v - v.abs() * self.sigma0 / self.stribeck_level(v) * z
+    }
+
+    /// Friction force on the contact (opposing positive `v`) and the bristle rate.
+    #[inline]
+    pub fn force_and_z_rate(&self, v: f64, z: f64) -> (f64, f64) {
+        let z_dot = self.z_rate(v, z);
+        (
+            self.sigma0 * z + self.sigma1 * z_dot + self.sigma2 * v,
+            z_dot,
+        )
+    }
+
+    /// Steady-state friction at constant sliding velocity v (paper Eq. 30), N.
+    /// At v = 0 this is 0 (the sgn convention of the paper).
+    pub fn steady_state_force(&self, v: f64) -> f64 {
+        self.stribeck_level(v) * v.signum_or_zero() + self.sigma2 * v
+    }
+
+    /// The bristle deflection of the slipping equilibrium, `sgn(v) g(v)` (paper Eq. 29), m.
+    pub fn steady_state_z(&self, v: f64) -> f64 {
+        self.g(v) * v.signum_or_zero()
+    }
+}
+
+/// `sgn` with sgn(0) = 0, as in the paper.
+trait SignumOrZero {
+    fn signum_or_zero(self) -> Self;
+}
+
+impl SignumOrZero for f64 {
+    #[inline]
+    fn signum_or_zero(self) -> f64 {
+        if self > 0.0 {
+            1.0
+        } else if self < 0.0 {
+            -1.0
+        } else {
+            0.0
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn table1_is_valid() {
+        LugreParams::paper_table1().validate().unwrap();
+    }
+
+    #[test]
+    fn validation_names_the_parameter() {
+        let mut p = LugreParams::paper_table1();
+        p.sigma0 = -3.0;
+        let e = p.validate().unwrap_err();
+        assert_eq!(e.name, "sigma0");
+        assert_eq!(e.to_string(), "sigma0 must be > 0, got -3");
+        let mut p = LugreParams::paper_table1();
+        p.f_s = 4.0;
+        assert_eq!(p.validate().unwrap_err().name, "f_s");
+        let mut p = LugreParams::paper_table1();
+        p.v_s = 0.0;
+        assert_eq!(p.validate().unwrap_err().name, "v_s");
+        let mut p = LugreParams::paper_table1();
+        p.sigma1 = f64::NAN;
+        assert_eq!(p.validate().unwrap_err().name, "sigma1");
+    }
+
+    /// At the slipping equilibrium z = sgn(v) g(v) the bristle rate vanishes and
+    /// the force is the steady-state force of Eq. 30.
+    #[test]
+    fn slipping_equilibrium_gives_eq30() {
+        let p = LugreParams::paper_table1();
+        for &v in &[-0.2, -0.02, -1e-3, 1e-4, 5e-3, 0.0167, 0.05, 1.0] {
+            let z = p.steady_state_z(v);
+            let (f, z_dot) = p.force_and_z_rate(v, z);
+            assert!(
+                z_dot.abs() < 1e-15 * v.abs().max(1.0),
+                "z' = {z_dot} at v = {v}"
+            );
+            let by_eq30 = (p.f_c + (p.f_s - p.f_c) * (-(v / p.v_s).powi(2)).exp()) * v.signum()
+                + p.sigma2 * v;
+            assert_relative_eq!(f, by_eq30, max_relative = 1e-12);
+            assert_relative_eq!(f, p.steady_state_force(v), max_relative = 1e-14);
+        }
+        // At v = v_s the Stribeck term is exactly 1/e of its excess.
+        assert_relative_eq!(
+            p.stribeck_level(p.v_s),
+            5.1 + 1.4 / std::f64::consts::E,
+            max_relative = 1e-14
+        );
+    }
+}

@@ -1,0 +1,634 @@
+//! Robot files: URDF read with `urdf-rs` for links and joints, plus the fistage
+//! extension elements (read with `roxmltree` from the same file, since `urdf-rs`
+//! drops elements it does not know).
+//!
+//! Extension elements live in the namespace [`FISTAGE_NS`]:
+//!
+//! ```xml
+//! <robot name="stage" xmlns:fistage="urn:fistage:urdf:1">
+//!   <fistage:isolator name="fi" parent="table" child="bearing">
+//!     <origin xyz="0 0 0" rpy="0 0 0"/>           <!-- attach frame, parent link frame -->
+//!     <stiffness xyz="4e4 0 0" rpy="0 0 0"/>      <!-- N/m and N m/rad per attach axis -->
+//!     <damping xyz="2 0 0" rpy="0 0 0"/>          <!-- N s/m and N m s/rad -->
+//!   </fistage:isolator>
+//!   <fistage:friction name="bearing_friction" link="bearing">
+//!     <origin xyz="0 0 0"/>  <axis xyz="1 0 0"/>   <!-- contact point and sliding axis -->
+//!     <lugre sigma0="2.2e6" sigma1="237" sigma2="14.2" f_c="5.1" f_s="6.5" v_s="0.0167"/>
+//!   </fistage:friction>
+//!   <fistage:actuator name="drive" link="table"> <origin xyz="0 0 0"/> <axis xyz="1 0 0"/> </fistage:actuator>
+//!   <fistage:sensor name="encoder" link="table"> <origin xyz="0 0 0"/> <axis xyz="1 0 0"/> </fistage:sensor>
+//! </robot>
+//! ```
+//!
+//! This module only reads and checks each element on its own; how links join into
+//! bodies is the business of [`crate::assembly`].
+
+use crate::error::LoadError;
+use crate::lugre::LugreParams;
+use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+
+/// XML namespace of the fistage extension elements.
+pub const FISTAGE_NS: &str = "urn:fistage:urdf:1";
+
+/// Kinds of URDF joint that fistage supports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum JointKind {
+    /// Welds the child to the parent; the two links become one body.
+    Fixed,
+    /// Translation along the joint axis.
+    Prismatic,
+    /// Rotation about the joint axis (URDF `revolute` and `continuous`).
+    Revolute,
+    /// Six degrees of freedom.
+    Floating,
+}
+
+/// A link with its inertial data as written in the file.
+#[derive(Debug, Clone)]
+pub struct LinkSpec {
+    /// Link name.
+    pub name: String,
+    /// Mass, kg (0 for massless links such as `world`).
+    pub mass: f64,
+    /// Frame of the centre of mass and inertia axes, in the link frame.
+    pub inertial_origin: Isometry3<f64>,
+    /// Inertia tensor about the centre of mass in `inertial_origin` axes, kg m^2.
+    pub inertia: Matrix3<f64>,
+}
+
+/// A joint as written in the file.
+#[derive(Debug, Clone)]
+pub struct JointSpec {
+    /// Joint name.
+    pub name: String,
+    /// Joint kind.
+    pub kind: JointKind,
+    /// Parent link name.
+    pub parent: String,
+    /// Child link name.
+    pub child: String,
+    /// Joint frame in the parent link frame; the child link frame coincides with
+    /// it at zero joint position.
+    pub origin: Isometry3<f64>,
+    /// Unit axis in the joint frame (prismatic and revolute joints).
+    pub axis: Vector3<f64>,
+}
+
+/// A linear six-axis bushing between two links (a friction isolator).
+#[derive(Debug, Clone)]
+pub struct IsolatorSpec {
+    /// Element name.
+    pub name: String,
+    /// Parent link name.
+    pub parent: String,
+    /// Child link name.
+    pub child: String,
+    /// Attach frame in the parent link frame. The child's attach frame is the
+    /// frame that coincides with it in the zero configuration (no preload).
+    pub origin: Isometry3<f64>,
+    /// Stiffness along x, y, z (N/m) and about x, y, z (N m/rad) of the attach frame.
+    pub stiffness: [f64; 6],
+    /// Damping along x, y, z (N s/m) and about x, y, z (N m s/rad).
+    pub damping: [f64; 6],
+}
+
+/// A LuGre friction contact between a link and its counter-surface (rail or platform).
+#[derive(Debug, Clone)]
+pub struct FrictionSpec {
+    /// Element name.
+    pub name: String,
+    /// Link that slides.
+    pub link: String,
+    /// Contact point in the link frame, m.
+    pub point: Vector3<f64>,
+    /// Sliding axis in the link frame (unit).
+    pub axis: Vector3<f64>,
+    /// LuGre parameters.
+    pub lugre: LugreParams,
+}
+
+/// A point and direction on a link: actuators and sensors.
+#[derive(Debug, Clone)]
+pub struct PointAxisSpec {
+    /// Element name.
+    pub name: String,
+    /// Link carrying the element.
+    pub link: String,
+    /// Point in the link frame, m.
+    pub point: Vector3<f64>,
+    /// Direction in the link frame (unit).
+    pub axis: Vector3<f64>,
+}
+
+/// Everything a robot file says, checked element by element.
+#[derive(Debug, Clone)]
+pub struct RobotSpec {
+    /// The file it came from.
+    pub file: PathBuf,
+    /// Robot name.
+    pub name: String,
+    /// Links.
+    pub links: Vec<LinkSpec>,
+    /// Joints.
+    pub joints: Vec<JointSpec>,
+    /// Isolator bushings.
+    pub isolators: Vec<IsolatorSpec>,
+    /// LuGre friction contacts.
+    pub frictions: Vec<FrictionSpec>,
+    /// Force actuators.
+    pub actuators: Vec<PointAxisSpec>,
+    /// Position sensors (encoders).
+    pub sensors: Vec<PointAxisSpec>,
+}
+
+impl RobotSpec {
+    /// Reads and checks a robot file.
+    pub fn from_file(path: &Path) -> Result<Self, LoadError> {
+        let text = std::fs::read_to_string(path).map_err(|source| LoadError::Io {
+            file: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_str(&text, path)
+    }
+
+    /// Reads and checks robot XML; `file` is used in messages and nothing else.
+    pub fn from_str(text: &str, file: &Path) -> Result<Self, LoadError> {
+        let document = roxmltree::Document::parse(text).map_err(|e| LoadError::Syntax {
+            file: file.to_path_buf(),
+            message: format!("malformed XML: {e}"),
+        })?;
+        let urdf = urdf_rs::read_from_string(text).map_err(|e| LoadError::Syntax {
+            file: file.to_path_buf(),
+            message: format!("not a valid URDF robot: {e}"),
+        })?;
+        let reader = ExtensionReader { file };
+        let mut spec = RobotSpec {
+            file: file.to_path_buf(),
+            name: urdf.name.clone(),
+            links: urdf
+                .links
+                .iter()
+                .map(|l| link_spec(l, file))
+                .collect::<Result<_, _>>()?,
+            joints: urdf
+                .joints
+                .iter()
+                .map(|j| joint_spec(j, file))
+                .collect::<Result<_, _>>()?,
+            isolators: Vec::new(),
+            frictions: Vec::new(),
+            actuators: Vec::new(),
+            sensors: Vec::new(),
+        };
+        reader.read_extensions(&document, &mut spec)?;
+        spec.check_names()?;
+        Ok(spec)
+    }
+
+    /// Element names must be unique and must not shadow link names, so that a
+    /// scenario override by name is never ambiguous.
+    fn check_names(&self) -> Result<(), LoadError> {
+        let mut links = HashSet::new();
+        for link in &self.links {
+            if !links.insert(link.name.as_str()) {
+                return Err(LoadError::robot(
+                    &self.file,
+                    format!("link \"{}\"", link.name),
+                    "defined twice",
+                ));
+            }
+        }
+        let mut joints = HashSet::new();
+        for joint in &self.joints {
+            if !joints.insert(joint.name.as_str()) {
+                return Err(LoadError::robot(
+                    &self.file,
+                    format!("joint \"{}\"", joint.name),
+                    "defined twice",
+                ));
+            }
+        }
+        let mut elements = HashSet::new();
+        let names = self
+            .isolators
+            .iter()
+            .map(|e| ("isolator", &e.name))
+            .chain(self.frictions.iter().map(|e| ("friction", &e.name)))
+            .chain(self.actuators.iter().map(|e| ("actuator", &e.name)))
+            .chain(self.sensors.iter().map(|e| ("sensor", &e.name)));
+        for (kind, name) in names {
+            let element = format!("{kind} \"{name}\"");
+            if links.contains(name.as_str()) {
+                return Err(LoadError::robot(
+                    &self.file,
+                    element,
+                    "has the name of a link; element names must differ from link names",
+                ));
+            }
+            if !elements.insert(name.as_str()) {
+                return Err(LoadError::robot(
+                    &self.file,
+                    element,
+                    "element name used twice",
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+fn pose_to_isometry(pose: &urdf_rs::Pose) -> Isometry3<f64> {
+    isometry_from_xyz_rpy(pose.xyz.0, pose.rpy.0)
+}
+
+/// URDF pose convention: translate by xyz, rotate by fixed-axis roll, pitch, yaw.
+pub fn isometry_from_xyz_rpy(xyz: [f64; 3], rpy: [f64; 3]) -> Isometry3<f64> {
+    Isometry3::from_parts(
+        Translation3::new(xyz[0], xyz[1], xyz[2]),
+        UnitQuaternion::from_euler_angles(rpy[0], rpy[1], rpy[2]),
+    )
+}
+
+fn link_spec(link: &urdf_rs::Link, file: &Path) -> Result<LinkSpec, LoadError> {
+    let element = format!("link \"{}\"", link.name);
+    let mass = link.inertial.mass.value;
+    if !mass.is_finite() || mass < 0.0 {
+        return Err(LoadError::robot(
+            file,
+            element,
+            format!("mass must be >= 0, got {mass}"),
+        ));
+    }
+    let i = &link.inertial.inertia;
+    let inertia = Matrix3::new(
+        i.ixx, i.ixy, i.ixz, //
+        i.ixy, i.iyy, i.iyz, //
+        i.ixz, i.iyz, i.izz,
+    );
+    if inertia.iter().any(|v| !v.is_finite()) {
+        return Err(LoadError::robot(file, element, "inertia must be finite"));
+    }
+    check_inertia(&inertia).map_err(|m| LoadError::robot(file, &element, m))?;
+    let inertial_origin = pose_to_isometry(&link.inertial.origin);
+    if inertial_origin
+        .translation
+        .vector
+        .iter()
+        .any(|v| !v.is_finite())
+    {
+        return Err(LoadError::robot(
+            file,
+            element,
+            "inertial origin must be finite",
+        ));
+    }
+    Ok(LinkSpec {
+        name: link.name.clone(),
+        mass,
+        inertial_origin,
+        inertia,
+    })
+}
+
+/// A physical inertia tensor has non-negative principal moments that satisfy the
+/// triangle inequality.
+fn check_inertia(inertia: &Matrix3<f64>) -> Result<(), String> {
+    let moments = inertia.symmetric_eigenvalues();
+    let tolerance = 1e-9 * moments.amax().max(f64::MIN_POSITIVE);
+    if moments.iter().any(|&m| m < -tolerance) {
+        return Err(format!(
+            "inertia must be positive semi-definite, principal moments are {:.6e}, {:.6e}, {:.6e}",
+            moments[0], moments[1], moments[2]
+        ));
+    }
+    let (a, b, c) = (moments[0], moments[1], moments[2]);
+    if a > b + c + tolerance || b > a + c + tolerance || c > a + b + tolerance {
+        return Err(format!(
+            "principal moments {a:.6e}, {b:.6e}, {c:.6e} violate the triangle inequality"
+        ));
+    }
+    Ok(())
+}
+
+fn joint_spec(joint: &urdf_rs::Joint, file: &Path) -> Result<JointSpec, LoadError> {
+    let element = format!("joint \"{}\"", joint.name);
+    let kind = match joint.joint_type {
+        urdf_rs::JointType::Fixed => JointKind::Fixed,
+        urdf_rs::JointType::Prismatic => JointKind::Prismatic,
+        urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => JointKind::Revolute,
+        urdf_rs::JointType::Floating => JointKind::Floating,
+        ref other => {
+            return Err(LoadError::robot(
+                file,
+                element,
+                format!(
+                    "joint type {other:?} is not supported (use fixed, prismatic, revolute, continuous or floating)"
+                ),
+            ));
+        }
+    };
+    let axis = Vector3::from(joint.axis.xyz.0);
+    let needs_axis = matches!(kind, JointKind::Prismatic | JointKind::Revolute);
+    let axis = if needs_axis {
+        unit_axis(axis).map_err(|m| LoadError::robot(file, &element, m))?
+    } else {
+        Vector3::x()
+    };
+    Ok(JointSpec {
+        name: joint.name.clone(),
+        kind,
+        parent: joint.parent.link.clone(),
+        child: joint.child.link.clone(),
+        origin: pose_to_isometry(&joint.origin),
+        axis,
+    })
+}
+
+fn unit_axis(axis: Vector3<f64>) -> Result<Vector3<f64>, String> {
+    let norm = axis.norm();
+    if !norm.is_finite() || norm < 1e-12 {
+        return Err(format!(
+            "axis must be a non-zero finite vector, got [{} {} {}]",
+            axis.x, axis.y, axis.z
+        ));
+    }
+    Ok(axis / norm)
+}
+
+/// Reads the `fistage:` elements of one document.
+struct ExtensionReader<'a> {
+    file: &'a Path,
+}
+
+impl ExtensionReader<'_> {
+    fn read_extensions(
+        &self,
+        document: &roxmltree::Document,
+        spec: &mut RobotSpec,
+    ) -> Result<(), LoadError> {
+        let root = document.root_element();
+        for node in root.children().filter(|n| n.is_element()) {
+            if node.tag_name().namespace() != Some(FISTAGE_NS) {
+                if node.tag_name().name().contains(':') || node.tag_name().namespace().is_some() {
+                    self.warn_foreign(node)?;
+                }
+                continue;
+            }
+            match node.tag_name().name() {
+                "isolator" => spec.isolators.push(self.isolator(node)?),
+                "friction" => spec.frictions.push(self.friction(node)?),
+                "actuator" => spec.actuators.push(self.point_axis(node, "actuator")?),
+                "sensor" => spec.sensors.push(self.point_axis(node, "sensor")?),
+                other => {
+                    return Err(LoadError::robot(
+                        self.file,
+                        format!("fistage:{other}"),
+                        "unknown element (expected isolator, friction, actuator or sensor)",
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Elements of other namespaces are allowed (e.g. `drake:`), but an element
+    /// whose namespace looks like a mistyped fistage one is an error.
+    fn warn_foreign(&self, node: roxmltree::Node) -> Result<(), LoadError> {
+        if let Some(ns) = node.tag_name().namespace()
+            && ns.contains("fistage")
+        {
+            return Err(LoadError::robot(
+                self.file,
+                node.tag_name().name(),
+                format!("namespace \"{ns}\" is not the fistage namespace \"{FISTAGE_NS}\""),
+            ));
+        }
+        Ok(())
+    }
+
+    fn element_label(&self, node: roxmltree::Node, kind: &str) -> String {
+        match node.attribute("name") {
+            Some(name) => format!("{kind} \"{name}\" (line {})", self.line(node)),
+            None => format!("{kind} (line {})", self.line(node)),
+        }
+    }
+
+    fn line(&self, node: roxmltree::Node) -> u32 {
+        node.document().text_pos_at(node.range().start).row
+    }
+
+    fn error(&self, element: &str, message: impl Into<String>) -> LoadError {
+        LoadError::robot(self.file, element, message)
+    }
+
+    fn required_attribute<'n>(
+        &self,
+        node: roxmltree::Node<'n, '_>,
+        element: &str,
+        attribute: &str,
+    ) -> Result<&'n str, LoadError> {
+        node.attribute(attribute)
+            .ok_or_else(|| self.error(element, format!("missing attribute \"{attribute}\"")))
+    }
+
+    fn check_attributes(
+        &self,
+        node: roxmltree::Node,
+        element: &str,
+        allowed: &[&str],
+    ) -> Result<(), LoadError> {
+        for attribute in node.attributes() {
+            if attribute.namespace().is_none() && !allowed.contains(&attribute.name()) {
+                return Err(self.error(
+                    element,
+                    format!(
+                        "unknown attribute \"{}\" on <{}> (allowed: {})",
+                        attribute.name(),
+                        node.tag_name().name(),
+                        allowed.join(", ")
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Child elements by tag; unknown tags are errors.
+    fn children<'n, 'i>(
+        &self,
+        node: roxmltree::Node<'n, 'i>,
+        element: &str,
+        allowed: &[&str],
+    ) -> Result<Vec<roxmltree::Node<'n, 'i>>, LoadError> {
+        let mut seen = HashSet::new();
+        let mut children = Vec::new();
+        for child in node.children().filter(|n| n.is_element()) {
+            let tag = child.tag_name().name();
+            if !allowed.contains(&tag) {
+                return Err(self.error(
+                    element,
+                    format!("unknown child <{tag}> (allowed: {})", allowed.join(", ")),
+                ));
+            }
+            if !seen.insert(tag) {
+                return Err(self.error(element, format!("<{tag}> given twice")));
+            }
+            children.push(child);
+        }
+        Ok(children)
+    }
+
+    fn find<'n, 'i>(
+        children: &[roxmltree::Node<'n, 'i>],
+        tag: &str,
+    ) -> Option<roxmltree::Node<'n, 'i>> {
+        children
+            .iter()
+            .copied()
+            .find(|c| c.tag_name().name() == tag)
+    }
+
+    fn vector(
+        &self,
+        node: roxmltree::Node,
+        element: &str,
+        attribute: &str,
+    ) -> Result<Option<[f64; 3]>, LoadError> {
+        let Some(text) = node.attribute(attribute) else {
+            return Ok(None);
+        };
+        let place = format!("<{} {attribute}=\"{text}\">", node.tag_name().name());
+        let values: Vec<f64> = text
+            .split_whitespace()
+            .map(|t| t.parse::<f64>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| self.error(element, format!("{place}: expected three numbers")))?;
+        match values.as_slice() {
+            [a, b, c] if values.iter().all(|v| v.is_finite()) => Ok(Some([*a, *b, *c])),
+            _ => Err(self.error(element, format!("{place}: expected three finite numbers"))),
+        }
+    }
+
+    fn origin(
+        &self,
+        children: &[roxmltree::Node],
+        element: &str,
+    ) -> Result<Isometry3<f64>, LoadError> {
+        let Some(origin) = Self::find(children, "origin") else {
+            return Ok(Isometry3::identity());
+        };
+        self.check_attributes(origin, element, &["xyz", "rpy"])?;
+        let xyz = self.vector(origin, element, "xyz")?.unwrap_or_default();
+        let rpy = self.vector(origin, element, "rpy")?.unwrap_or_default();
+        Ok(isometry_from_xyz_rpy(xyz, rpy))
+    }
+
+    fn axis(&self, children: &[roxmltree::Node], element: &str) -> Result<Vector3<f64>, LoadError> {
+        let axis = Self::find(children, "axis")
+            .ok_or_else(|| self.error(element, "missing <axis xyz=\"...\"/>"))?;
+        self.check_attributes(axis, element, &["xyz"])?;
+        let xyz = self
+            .vector(axis, element, "xyz")?
+            .ok_or_else(|| self.error(element, "<axis> needs xyz"))?;
+        unit_axis(Vector3::from(xyz)).map_err(|m| self.error(element, m))
+    }
+
+    /// Six non-negative values from `xyz` (translational) and `rpy` (rotational).
+    fn six_axis(
+        &self,
+        node: Option<roxmltree::Node>,
+        element: &str,
+        what: &str,
+    ) -> Result<[f64; 6], LoadError> {
+        let Some(node) = node else {
+            return Ok([0.0; 6]);
+        };
+        self.check_attributes(node, element, &["xyz", "rpy"])?;
+        let t = self.vector(node, element, "xyz")?.unwrap_or_default();
+        let r = self.vector(node, element, "rpy")?.unwrap_or_default();
+        let values = [t[0], t[1], t[2], r[0], r[1], r[2]];
+        if let Some(v) = values.iter().find(|v| **v < 0.0) {
+            return Err(self.error(element, format!("{what} must be >= 0, got {v}")));
+        }
+        Ok(values)
+    }
+
+    fn isolator(&self, node: roxmltree::Node) -> Result<IsolatorSpec, LoadError> {
+        let element = self.element_label(node, "isolator");
+        self.check_attributes(node, &element, &["name", "parent", "child"])?;
+        let name = self.required_attribute(node, &element, "name")?;
+        let parent = self.required_attribute(node, &element, "parent")?;
+        let child = self.required_attribute(node, &element, "child")?;
+        if parent == child {
+            return Err(self.error(&element, "parent and child must be different links"));
+        }
+        let children = self.children(node, &element, &["origin", "stiffness", "damping"])?;
+        let stiffness_node = Self::find(&children, "stiffness")
+            .ok_or_else(|| self.error(&element, "missing <stiffness xyz=\"..\" rpy=\"..\"/>"))?;
+        Ok(IsolatorSpec {
+            name: name.to_string(),
+            parent: parent.to_string(),
+            child: child.to_string(),
+            origin: self.origin(&children, &element)?,
+            stiffness: self.six_axis(Some(stiffness_node), &element, "stiffness")?,
+            damping: self.six_axis(Self::find(&children, "damping"), &element, "damping")?,
+        })
+    }
+
+    fn friction(&self, node: roxmltree::Node) -> Result<FrictionSpec, LoadError> {
+        let element = self.element_label(node, "friction");
+        self.check_attributes(node, &element, &["name", "link"])?;
+        let name = self.required_attribute(node, &element, "name")?;
+        let link = self.required_attribute(node, &element, "link")?;
+        let children = self.children(node, &element, &["origin", "axis", "lugre"])?;
+        let lugre_node = Self::find(&children, "lugre").ok_or_else(|| {
+            self.error(
+                &element,
+                "missing <lugre sigma0=.. sigma1=.. sigma2=.. f_c=.. f_s=.. v_s=../>",
+            )
+        })?;
+        self.check_attributes(lugre_node, &element, &LugreParams::NAMES)?;
+        let mut values = [0.0; 6];
+        for (value, name) in values.iter_mut().zip(LugreParams::NAMES) {
+            let text = self.required_attribute(lugre_node, &element, name)?;
+            *value = text.trim().parse().map_err(|_| {
+                self.error(&element, format!("<lugre {name}=\"{text}\">: not a number"))
+            })?;
+        }
+        let [sigma0, sigma1, sigma2, f_c, f_s, v_s] = values;
+        let lugre = LugreParams {
+            sigma0,
+            sigma1,
+            sigma2,
+            f_c,
+            f_s,
+            v_s,
+        };
+        lugre
+            .validate()
+            .map_err(|e| self.error(&element, e.to_string()))?;
+        Ok(FrictionSpec {
+            name: name.to_string(),
+            link: link.to_string(),
+            point: self.origin(&children, &element)?.translation.vector,
+            axis: self.axis(&children, &element)?,
+            lugre,
+        })
+    }
+
+    fn point_axis(&self, node: roxmltree::Node, kind: &str) -> Result<PointAxisSpec, LoadError> {
+        let element = self.element_label(node, kind);
+        self.check_attributes(node, &element, &["name", "link"])?;
+        let name = self.required_attribute(node, &element, "name")?;
+        let link = self.required_attribute(node, &element, "link")?;
+        let children = self.children(node, &element, &["origin", "axis"])?;
+        Ok(PointAxisSpec {
+            name: name.to_string(),
+            link: link.to_string(),
+            point: self.origin(&children, &element)?.translation.vector,
+            axis: self.axis(&children, &element)?,
+        })
+    }
+}

@@ -1,0 +1,518 @@
+//! Scenario files (TOML): which robot, per-element overrides, platform velocity,
+//! controller, reference, run length, solver tolerances, outputs and the
+//! steady-state window. Parsing is strict: an unknown key is an error naming it.
+//!
+//! ```toml
+//! title = "Fig. 5b, stage with friction isolator"
+//! robot = "../../robots/stage_1dof_fi.urdf"   # relative to this file
+//! duration = 5.0                              # s
+//!
+//! [platform]
+//! velocity = 0.02                             # m/s, counter-surface along each contact axis
+//!
+//! [controller]                                # PID on a sensor, through an actuator
+//! sensor = "encoder"
+//! actuator = "drive"
+//! k = 6e4                                     # N/m
+//! c = 100.0                                   # N s/m
+//! k_i = 0.0                                   # N/(m s)
+//!
+//! [reference]
+//! kind = "sine"                               # constant | step | sine | p2p | csv
+//! amplitude = 1e-3
+//! frequency = 0.1
+//!
+//! [overrides.bearing_friction]                # by element (or link) name
+//! f_c = 6.1
+//! ```
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use crate::error::LoadError;
+use crate::reference::Reference;
+
+/// The scenario file as written, before checks.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ScenarioFile {
+    robot: PathBuf,
+    #[serde(default)]
+    title: String,
+    duration: f64,
+    #[serde(default = "default_gravity")]
+    gravity: [f64; 3],
+    #[serde(default)]
+    platform: PlatformFile,
+    controller: Option<ControllerSettings>,
+    #[serde(default)]
+    reference: ReferenceFile,
+    #[serde(default)]
+    overrides: BTreeMap<String, BTreeMap<String, toml::Value>>,
+    #[serde(default)]
+    initial: BTreeMap<String, f64>,
+    #[serde(default)]
+    solver: SolverSettings,
+    #[serde(default)]
+    output: OutputFile,
+    #[serde(default)]
+    statistics: StatisticsFile,
+    /// Parameter sweeps are read by the analysis crate; kept as raw TOML here.
+    sweep: Option<toml::Value>,
+}
+
+fn default_gravity() -> [f64; 3] {
+    [0.0, 0.0, -9.81]
+}
+
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PlatformFile {
+    #[serde(default)]
+    velocity: f64,
+}
+
+/// PID servo: `f = -k (x - x_r) - c (x' - x_r') - k_i * integral(x - x_r) dt`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControllerSettings {
+    /// Sensor element whose reading is x.
+    pub sensor: String,
+    /// Actuator element that applies f.
+    pub actuator: String,
+    /// Proportional gain, N/m.
+    pub k: f64,
+    /// Derivative gain, N s/m.
+    pub c: f64,
+    /// Integral gain, N/(m s).
+    #[serde(default)]
+    pub k_i: f64,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+enum ReferenceFile {
+    Constant {
+        #[serde(default)]
+        value: f64,
+    },
+    Step {
+        time: f64,
+        #[serde(default)]
+        initial: f64,
+        value: f64,
+    },
+    Sine {
+        amplitude: f64,
+        /// Hz.
+        frequency: f64,
+        #[serde(default)]
+        phase: f64,
+        #[serde(default)]
+        offset: f64,
+    },
+    #[serde(rename = "p2p", alias = "point_to_point")]
+    PointToPoint {
+        start: f64,
+        duration: f64,
+        #[serde(default)]
+        initial: f64,
+        distance: f64,
+    },
+    Csv {
+        file: PathBuf,
+        #[serde(default = "default_time_column")]
+        time_column: String,
+        #[serde(default = "default_position_column")]
+        position_column: String,
+    },
+}
+
+fn default_time_column() -> String {
+    "time".into()
+}
+
+fn default_position_column() -> String {
+    "position".into()
+}
+
+impl Default for ReferenceFile {
+    fn default() -> Self {
+        Self::Constant { value: 0.0 }
+    }
+}
+
+/// Which engine integrates the model, and how tightly.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolverSettings {
+    /// Engine name (`native`).
+    #[serde(default = "default_engine")]
+    pub engine: String,
+    /// Relative tolerance.
+    #[serde(default = "default_rtol")]
+    pub rtol: f64,
+    /// Multiplies the per-state absolute tolerances `rtol * nominal_scale`.
+    #[serde(default = "one")]
+    pub atol_scale: f64,
+    /// Largest step, s (default: no limit beyond the output interval).
+    pub max_step: Option<f64>,
+    /// Largest number of steps before the run is abandoned.
+    #[serde(default = "default_max_steps")]
+    pub max_steps: u64,
+}
+
+fn default_engine() -> String {
+    "native".into()
+}
+fn default_rtol() -> f64 {
+    1e-8
+}
+fn one() -> f64 {
+    1.0
+}
+fn default_max_steps() -> u64 {
+    20_000_000
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        Self {
+            engine: default_engine(),
+            rtol: default_rtol(),
+            atol_scale: 1.0,
+            max_step: None,
+            max_steps: default_max_steps(),
+        }
+    }
+}
+
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct OutputFile {
+    sample_rate: Option<f64>,
+    signals: Option<Vec<String>>,
+}
+
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StatisticsFile {
+    window: Option<[f64; 2]>,
+}
+
+/// A per-element parameter override: `[overrides.<target>] <key> = <value>`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Override {
+    /// Element or link name.
+    pub target: String,
+    /// Parameter key.
+    pub key: String,
+    /// New value, SI units.
+    pub value: f64,
+}
+
+/// A checked scenario with paths resolved against the scenario file.
+#[derive(Debug, Clone)]
+pub struct Scenario {
+    /// The scenario file.
+    pub file: PathBuf,
+    /// Human-readable title.
+    pub title: String,
+    /// Robot file, resolved.
+    pub robot: PathBuf,
+    /// Simulated time, s.
+    pub duration: f64,
+    /// Gravity in world coordinates, m/s^2.
+    pub gravity: [f64; 3],
+    /// Counter-surface velocity along every friction contact axis, m/s.
+    pub platform_velocity: f64,
+    /// Servo controller, if any.
+    pub controller: Option<ControllerSettings>,
+    /// Reference for the controller.
+    pub reference: Reference,
+    /// Overrides in file order (sorted by target, then key).
+    pub overrides: Vec<Override>,
+    /// Initial state entries by state name (others start at zero).
+    pub initial: BTreeMap<String, f64>,
+    /// Solver settings.
+    pub solver: SolverSettings,
+    /// Output sample rate, Hz.
+    pub sample_rate: f64,
+    /// Signals to write (all when `None`).
+    pub signals: Option<Vec<String>>,
+    /// Steady-state window for statistics, s.
+    pub window: [f64; 2],
+    /// The raw `[sweep]` table, when present.
+    pub sweep: Option<toml::Value>,
+}
+
+impl Scenario {
+    /// Reads and checks a scenario file (not the robot it names).
+    pub fn from_file(path: &Path) -> Result<Self, LoadError> {
+        let text = std::fs::read_to_string(path).map_err(|source| LoadError::Io {
+            file: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_str(&text, path)
+    }
+
+    /// Reads and checks scenario TOML; relative paths resolve against `file`'s folder.
+    pub fn from_str(text: &str, file: &Path) -> Result<Self, LoadError> {
+        let raw: ScenarioFile = toml::from_str(text).map_err(|e| LoadError::Syntax {
+            file: file.to_path_buf(),
+            message: e.to_string().trim_end().replace('\n', "\n  "),
+        })?;
+        let base = file.parent().unwrap_or(Path::new(""));
+        let checker = Checker { file };
+        checker.positive("duration", raw.duration)?;
+        for (axis, g) in ["x", "y", "z"].iter().zip(raw.gravity) {
+            checker.finite(&format!("gravity.{axis}"), g)?;
+        }
+        checker.finite("platform.velocity", raw.platform.velocity)?;
+        if let Some(controller) = &raw.controller {
+            checker.non_negative("controller.k", controller.k)?;
+            checker.non_negative("controller.c", controller.c)?;
+            checker.non_negative("controller.k_i", controller.k_i)?;
+        }
+        let reference = checker.reference(raw.reference, base)?;
+        checker.positive("solver.rtol", raw.solver.rtol)?;
+        if raw.solver.rtol >= 0.1 {
+            return Err(checker.error("solver.rtol", "must be < 0.1"));
+        }
+        checker.positive("solver.atol_scale", raw.solver.atol_scale)?;
+        if let Some(h) = raw.solver.max_step {
+            checker.positive("solver.max_step", h)?;
+        }
+        let sample_rate = raw
+            .output
+            .sample_rate
+            .unwrap_or_else(|| default_sample_rate(raw.duration));
+        checker.positive("output.sample_rate", sample_rate)?;
+        let window = raw
+            .statistics
+            .window
+            .unwrap_or([raw.duration / 2.0, raw.duration]);
+        let window_ok = window[0] >= 0.0 && window[0] < window[1] && window[1] <= raw.duration;
+        if !window_ok {
+            return Err(checker.error(
+                "statistics.window",
+                format!(
+                    "must satisfy 0 <= start < end <= duration ({}), got [{}, {}]",
+                    raw.duration, window[0], window[1]
+                ),
+            ));
+        }
+        let overrides = checker.overrides(raw.overrides)?;
+        for (name, value) in &raw.initial {
+            checker.finite(&format!("initial.{name}"), *value)?;
+        }
+        Ok(Scenario {
+            file: file.to_path_buf(),
+            title: raw.title,
+            robot: base.join(raw.robot),
+            duration: raw.duration,
+            gravity: raw.gravity,
+            platform_velocity: raw.platform.velocity,
+            controller: raw.controller,
+            reference,
+            overrides,
+            initial: raw.initial,
+            solver: raw.solver,
+            sample_rate,
+            signals: raw.output.signals,
+            window,
+            sweep: raw.sweep,
+        })
+    }
+
+    /// An error about a key of this scenario.
+    pub fn error(&self, key: impl Into<String>, message: impl Into<String>) -> LoadError {
+        LoadError::scenario(&self.file, key, message)
+    }
+}
+
+/// 1 kHz for short runs, fewer samples for long ones (at most about 200 000).
+fn default_sample_rate(duration: f64) -> f64 {
+    1000.0_f64.min(200_000.0 / duration)
+}
+
+struct Checker<'a> {
+    file: &'a Path,
+}
+
+impl Checker<'_> {
+    fn error(&self, key: &str, message: impl Into<String>) -> LoadError {
+        LoadError::scenario(self.file, key, message)
+    }
+
+    fn finite(&self, key: &str, value: f64) -> Result<(), LoadError> {
+        if value.is_finite() {
+            Ok(())
+        } else {
+            Err(self.error(key, format!("must be finite, got {value}")))
+        }
+    }
+
+    fn positive(&self, key: &str, value: f64) -> Result<(), LoadError> {
+        if value.is_finite() && value > 0.0 {
+            Ok(())
+        } else {
+            Err(self.error(key, format!("must be > 0, got {value}")))
+        }
+    }
+
+    fn non_negative(&self, key: &str, value: f64) -> Result<(), LoadError> {
+        if value.is_finite() && value >= 0.0 {
+            Ok(())
+        } else {
+            Err(self.error(key, format!("must be >= 0, got {value}")))
+        }
+    }
+
+    fn reference(&self, raw: ReferenceFile, base: &Path) -> Result<Reference, LoadError> {
+        Ok(match raw {
+            ReferenceFile::Constant { value } => {
+                self.finite("reference.value", value)?;
+                Reference::Constant { value }
+            }
+            ReferenceFile::Step {
+                time,
+                initial,
+                value,
+            } => {
+                self.non_negative("reference.time", time)?;
+                self.finite("reference.initial", initial)?;
+                self.finite("reference.value", value)?;
+                Reference::Step {
+                    time,
+                    initial,
+                    value,
+                }
+            }
+            ReferenceFile::Sine {
+                amplitude,
+                frequency,
+                phase,
+                offset,
+            } => {
+                self.finite("reference.amplitude", amplitude)?;
+                self.positive("reference.frequency", frequency)?;
+                self.finite("reference.phase", phase)?;
+                self.finite("reference.offset", offset)?;
+                Reference::Sine {
+                    amplitude,
+                    frequency_hz: frequency,
+                    phase,
+                    offset,
+                }
+            }
+            ReferenceFile::PointToPoint {
+                start,
+                duration,
+                initial,
+                distance,
+            } => {
+                self.non_negative("reference.start", start)?;
+                self.positive("reference.duration", duration)?;
+                self.finite("reference.initial", initial)?;
+                self.finite("reference.distance", distance)?;
+                Reference::PointToPoint {
+                    start,
+                    duration,
+                    initial,
+                    distance,
+                }
+            }
+            ReferenceFile::Csv {
+                file,
+                time_column,
+                position_column,
+            } => Reference::from_csv(&base.join(file), &time_column, &position_column)?,
+        })
+    }
+
+    fn overrides(
+        &self,
+        raw: BTreeMap<String, BTreeMap<String, toml::Value>>,
+    ) -> Result<Vec<Override>, LoadError> {
+        let mut overrides = Vec::new();
+        for (target, table) in raw {
+            for (key, value) in table {
+                let path = format!("overrides.{target}.{key}");
+                let value = match value {
+                    toml::Value::Float(v) => v,
+                    toml::Value::Integer(v) => v as f64,
+                    other => {
+                        return Err(self
+                            .error(&path, format!("must be a number, got {}", other.type_str())));
+                    }
+                };
+                self.finite(&path, value)?;
+                overrides.push(Override {
+                    target: target.clone(),
+                    key,
+                    value,
+                });
+            }
+        }
+        Ok(overrides)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Scenario, LoadError> {
+        Scenario::from_str(text, Path::new("scenarios/test.toml"))
+    }
+
+    #[test]
+    fn minimal_scenario_has_defaults() {
+        let s = parse("robot = \"../robots/r.urdf\"\nduration = 2.0\n").unwrap();
+        assert_eq!(s.robot, Path::new("scenarios/../robots/r.urdf"));
+        assert_eq!(s.window, [1.0, 2.0]);
+        assert_eq!(s.solver.rtol, 1e-8);
+        assert_eq!(s.reference, Reference::Constant { value: 0.0 });
+        assert_eq!(s.sample_rate, 1000.0);
+    }
+
+    #[test]
+    fn unknown_keys_are_named() {
+        let e = parse("robot = \"r.urdf\"\nduration = 2.0\n[controller]\nsensor=\"s\"\nactuator=\"a\"\nk=1\nc=1\nkp=3\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("scenarios/test.toml") && e.contains("kp"), "{e}");
+        let e = parse("robot = \"r.urdf\"\nduration = 2.0\nspeed = 3\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("speed"), "{e}");
+    }
+
+    #[test]
+    fn bad_values_are_named() {
+        let e = parse("robot = \"r.urdf\"\nduration = -1\n")
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, "scenarios/test.toml: duration: must be > 0, got -1");
+        let e = parse("robot = \"r.urdf\"\nduration = 1\n[overrides.bearing]\nsigma0 = \"big\"\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("overrides.bearing.sigma0: must be a number"),
+            "{e}"
+        );
+        let e = parse(
+            "robot = \"r.urdf\"\nduration = 1\n[reference]\nkind = \"sine\"\namplitude = 1\n",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("frequency"), "{e}");
+        let e = parse("robot = \"r.urdf\"\nduration = 1\n[statistics]\nwindow = [0.5, 2.0]\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("statistics.window"), "{e}");
+    }
+}

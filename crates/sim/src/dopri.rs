@@ -1,0 +1,388 @@
+//! Dormand-Prince 5(4): an explicit embedded Runge-Kutta pair with the FSAL
+//! property, a PI step-size controller and Hairer's fourth-order continuous
+//! extension for dense output. Independent of fistage models: it integrates any
+//! [`OdeSystem`].
+
+/// A system `x' = f(t, x)`.
+pub trait OdeSystem {
+    /// Number of states.
+    fn dim(&self) -> usize;
+    /// Writes f(t, x) into `dx`.
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]);
+}
+
+/// Step-size controller and tolerance settings.
+#[derive(Debug, Clone)]
+pub struct Tolerances {
+    /// Relative tolerance.
+    pub rtol: f64,
+    /// Absolute tolerance per state.
+    pub atol: Vec<f64>,
+    /// Largest step, s.
+    pub max_step: f64,
+    /// Smallest step relative to |t| before the run is declared failed.
+    pub min_step_relative: f64,
+}
+
+const C2: f64 = 1.0 / 5.0;
+const C3: f64 = 3.0 / 10.0;
+const C4: f64 = 4.0 / 5.0;
+const C5: f64 = 8.0 / 9.0;
+const A21: f64 = 1.0 / 5.0;
+const A31: f64 = 3.0 / 40.0;
+const A32: f64 = 9.0 / 40.0;
+const A41: f64 = 44.0 / 45.0;
+const A42: f64 = -56.0 / 15.0;
+const A43: f64 = 32.0 / 9.0;
+const A51: f64 = 19372.0 / 6561.0;
+const A52: f64 = -25360.0 / 2187.0;
+const A53: f64 = 64448.0 / 6561.0;
+const A54: f64 = -212.0 / 729.0;
+const A61: f64 = 9017.0 / 3168.0;
+const A62: f64 = -355.0 / 33.0;
+const A63: f64 = 46732.0 / 5247.0;
+const A64: f64 = 49.0 / 176.0;
+const A65: f64 = -5103.0 / 18656.0;
+const A71: f64 = 35.0 / 384.0;
+const A73: f64 = 500.0 / 1113.0;
+const A74: f64 = 125.0 / 192.0;
+const A75: f64 = -2187.0 / 6784.0;
+const A76: f64 = 11.0 / 84.0;
+const E1: f64 = 71.0 / 57600.0;
+const E3: f64 = -71.0 / 16695.0;
+const E4: f64 = 71.0 / 1920.0;
+const E5: f64 = -17253.0 / 339200.0;
+const E6: f64 = 22.0 / 525.0;
+const E7: f64 = -1.0 / 40.0;
+const D1: f64 = -12715105075.0 / 11282082432.0;
+const D3: f64 = 87487479700.0 / 32700410799.0;
+const D4: f64 = -10690763975.0 / 1880347072.0;
+const D5: f64 = 701980252875.0 / 199316789632.0;
+const D6: f64 = -1453857185.0 / 822651844.0;
+const D7: f64 = 69997945.0 / 29380423.0;
+
+/// Why a step attempt could not proceed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StepFailure {
+    /// The step size fell below the smallest allowed step at time t.
+    StepSizeUnderflow {
+        /// Time reached.
+        t: f64,
+        /// Step size tried.
+        h: f64,
+        /// First state that became non-finite in the last rejected attempt, if any.
+        non_finite: Option<usize>,
+    },
+}
+
+/// Counters of an integration.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct StepCounts {
+    /// Accepted steps.
+    pub steps: u64,
+    /// Rejected steps.
+    pub rejected: u64,
+    /// Right-hand-side evaluations.
+    pub rhs_evaluations: u64,
+}
+
+/// The integrator's state between steps, including the dense-output polynomial
+/// of the last accepted step.
+pub struct DormandPrince {
+    tol: Tolerances,
+    n: usize,
+    /// Current time.
+    pub t: f64,
+    /// Current state.
+    pub x: Vec<f64>,
+    /// Suggested next step.
+    pub h: f64,
+    k: [Vec<f64>; 7],
+    x_new: Vec<f64>,
+    stage: Vec<f64>,
+    dense: [Vec<f64>; 5],
+    t_previous: f64,
+    h_previous: f64,
+    error_previous: f64,
+    /// Counters.
+    pub counts: StepCounts,
+    non_finite: Option<usize>,
+}
+
+impl DormandPrince {
+    /// Starts at (t0, x0); evaluates f once and picks an initial step.
+    pub fn new(system: &mut dyn OdeSystem, t0: f64, x0: &[f64], tol: Tolerances) -> Self {
+        let n = system.dim();
+        let zeros = || vec![0.0; n];
+        let mut integrator = Self {
+            tol,
+            n,
+            t: t0,
+            x: x0.to_vec(),
+            h: 0.0,
+            k: [
+                zeros(),
+                zeros(),
+                zeros(),
+                zeros(),
+                zeros(),
+                zeros(),
+                zeros(),
+            ],
+            x_new: zeros(),
+            stage: zeros(),
+            dense: [zeros(), zeros(), zeros(), zeros(), zeros()],
+            t_previous: t0,
+            h_previous: 0.0,
+            error_previous: 1e-4,
+            counts: StepCounts::default(),
+            non_finite: None,
+        };
+        system.rhs(t0, &integrator.x, &mut integrator.k[0]);
+        integrator.counts.rhs_evaluations += 1;
+        integrator.h = integrator.initial_step(system);
+        integrator
+    }
+
+    /// Restarts at the current point (after a discontinuity in the inputs):
+    /// re-evaluates f and keeps the current step suggestion.
+    pub fn restart(&mut self, system: &mut dyn OdeSystem) {
+        system.rhs(self.t, &self.x, &mut self.k[0]);
+        self.counts.rhs_evaluations += 1;
+        self.error_previous = 1e-4;
+    }
+
+    fn scale(&self, i: usize, a: f64, b: f64) -> f64 {
+        self.tol.atol[i] + self.tol.rtol * a.abs().max(b.abs())
+    }
+
+    /// Hairer's starting-step heuristic.
+    fn initial_step(&mut self, system: &mut dyn OdeSystem) -> f64 {
+        let n = self.n as f64;
+        let mut d0 = 0.0;
+        let mut d1 = 0.0;
+        for i in 0..self.n {
+            let sc = self.scale(i, self.x[i], self.x[i]);
+            d0 += (self.x[i] / sc).powi(2);
+            d1 += (self.k[0][i] / sc).powi(2);
+        }
+        let (d0, d1) = ((d0 / n).sqrt(), (d1 / n).sqrt());
+        let mut h0 = if d0 < 1e-5 || d1 < 1e-5 {
+            1e-6
+        } else {
+            0.01 * d0 / d1
+        };
+        h0 = h0.min(self.tol.max_step);
+        for i in 0..self.n {
+            self.stage[i] = self.x[i] + h0 * self.k[0][i];
+        }
+        system.rhs(self.t + h0, &self.stage, &mut self.k[1]);
+        self.counts.rhs_evaluations += 1;
+        let mut d2 = 0.0;
+        for i in 0..self.n {
+            let sc = self.scale(i, self.x[i], self.x[i]);
+            d2 += ((self.k[1][i] - self.k[0][i]) / sc).powi(2);
+        }
+        let d2 = (d2 / n).sqrt() / h0;
+        let h1 = if d1.max(d2) <= 1e-15 {
+            (h0 * 1e-3).max(1e-6)
+        } else {
+            (0.01 / d1.max(d2)).powf(0.2)
+        };
+        (100.0 * h0).min(h1).min(self.tol.max_step)
+    }
+
+    /// Takes one accepted step, not beyond `t_stop`. Rejected attempts are retried
+    /// with a smaller step. A non-finite error estimate counts as a rejection.
+    pub fn step(&mut self, system: &mut dyn OdeSystem, t_stop: f64) -> Result<(), StepFailure> {
+        const SAFETY: f64 = 0.9;
+        const BETA: f64 = 0.04;
+        const ALPHA: f64 = 0.2 - BETA * 0.75;
+        loop {
+            let remaining = t_stop - self.t;
+            let mut h = self.h.min(self.tol.max_step);
+            if h >= remaining * (1.0 - 1e-12) {
+                h = remaining;
+            }
+            let h_min = self.tol.min_step_relative * self.t.abs().max(1.0);
+            if h < h_min && h < remaining {
+                return Err(StepFailure::StepSizeUnderflow {
+                    t: self.t,
+                    h,
+                    non_finite: self.non_finite,
+                });
+            }
+            let error = self.attempt(system, h);
+            if error <= 1.0 {
+                let factor = if error == 0.0 {
+                    10.0
+                } else {
+                    (SAFETY * error.powf(-ALPHA) * self.error_previous.powf(BETA)).clamp(0.2, 10.0)
+                };
+                self.error_previous = error.max(1e-4);
+                self.accept(h);
+                self.h = h * factor;
+                return Ok(());
+            }
+            self.counts.rejected += 1;
+            let factor = if error.is_finite() {
+                (SAFETY * error.powf(-ALPHA)).clamp(0.2, 1.0)
+            } else {
+                0.1
+            };
+            self.h = h * factor;
+        }
+    }
+
+    /// One trial step of size h; returns the scaled error norm.
+    fn attempt(&mut self, system: &mut dyn OdeSystem, h: f64) -> f64 {
+        let (t, n) = (self.t, self.n);
+        let [k1, k2, k3, k4, k5, k6, k7] = &mut self.k;
+        let x = &self.x;
+        let stage = &mut self.stage;
+        for i in 0..n {
+            stage[i] = x[i] + h * A21 * k1[i];
+        }
+        system.rhs(t + C2 * h, stage, k2);
+        for i in 0..n {
+            stage[i] = x[i] + h * (A31 * k1[i] + A32 * k2[i]);
+        }
+        system.rhs(t + C3 * h, stage, k3);
+        for i in 0..n {
+            stage[i] = x[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i]);
+        }
+        system.rhs(t + C4 * h, stage, k4);
+        for i in 0..n {
+            stage[i] = x[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i]);
+        }
+        system.rhs(t + C5 * h, stage, k5);
+        for i in 0..n {
+            stage[i] =
+                x[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i]);
+        }
+        system.rhs(t + h, stage, k6);
+        let x_new = &mut self.x_new;
+        for i in 0..n {
+            x_new[i] =
+                x[i] + h * (A71 * k1[i] + A73 * k3[i] + A74 * k4[i] + A75 * k5[i] + A76 * k6[i]);
+        }
+        system.rhs(t + h, x_new, k7);
+        self.counts.rhs_evaluations += 6;
+        let mut sum = 0.0;
+        for i in 0..n {
+            let e =
+                h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]);
+            let sc = self.tol.atol[i] + self.tol.rtol * x[i].abs().max(x_new[i].abs());
+            sum += (e / sc) * (e / sc);
+        }
+        let error = (sum / n as f64).sqrt();
+        if error.is_finite() {
+            self.non_finite = None;
+            error
+        } else {
+            self.non_finite = (0..n).find(|&i| !x_new[i].is_finite() || !k7[i].is_finite());
+            f64::INFINITY
+        }
+    }
+
+    /// Stores the dense-output polynomial and advances to the new point.
+    fn accept(&mut self, h: f64) {
+        let [k1, _, k3, k4, k5, k6, k7] = &self.k;
+        let [r1, r2, r3, r4, r5] = &mut self.dense;
+        for i in 0..self.n {
+            let dy = self.x_new[i] - self.x[i];
+            let bspl = h * k1[i] - dy;
+            r1[i] = self.x[i];
+            r2[i] = dy;
+            r3[i] = bspl;
+            r4[i] = dy - h * k7[i] - bspl;
+            r5[i] =
+                h * (D1 * k1[i] + D3 * k3[i] + D4 * k4[i] + D5 * k5[i] + D6 * k6[i] + D7 * k7[i]);
+        }
+        self.t_previous = self.t;
+        self.h_previous = h;
+        self.t += h;
+        std::mem::swap(&mut self.x, &mut self.x_new);
+        // FSAL: the last stage is the first of the next step.
+        self.k.swap(0, 6);
+        self.counts.steps += 1;
+    }
+
+    /// State at time `t` inside the last accepted step, written into `out`.
+    pub fn interpolate(&self, t: f64, out: &mut [f64]) {
+        let theta = if self.h_previous > 0.0 {
+            ((t - self.t_previous) / self.h_previous).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        let theta1 = 1.0 - theta;
+        let [r1, r2, r3, r4, r5] = &self.dense;
+        for i in 0..self.n {
+            out[i] = r1[i] + theta * (r2[i] + theta1 * (r3[i] + theta * (r4[i] + theta1 * r5[i])));
+        }
+    }
+
+    /// Start time of the last accepted step.
+    pub fn previous_time(&self) -> f64 {
+        self.t_previous
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Harmonic oscillator x'' = -w^2 x.
+    struct Oscillator {
+        w: f64,
+    }
+
+    impl OdeSystem for Oscillator {
+        fn dim(&self) -> usize {
+            2
+        }
+        fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) {
+            dx[0] = x[1];
+            dx[1] = -self.w * self.w * x[0];
+        }
+    }
+
+    fn run(rtol: f64) -> (f64, f64, StepCounts) {
+        let w = 2.0 * std::f64::consts::PI;
+        let mut system = Oscillator { w };
+        let tol = Tolerances {
+            rtol,
+            atol: vec![rtol; 2],
+            max_step: f64::INFINITY,
+            min_step_relative: 1e-14,
+        };
+        let mut dp = DormandPrince::new(&mut system, 0.0, &[1.0, 0.0], tol);
+        let mut worst_dense = 0.0_f64;
+        let mut out = [0.0; 2];
+        while dp.t < 3.0 {
+            dp.step(&mut system, 3.0).unwrap();
+            let mid = 0.5 * (dp.previous_time() + dp.t);
+            dp.interpolate(mid, &mut out);
+            worst_dense = worst_dense.max((out[0] - (w * mid).cos()).abs());
+        }
+        ((dp.x[0] - (w * 3.0).cos()).abs(), worst_dense, dp.counts)
+    }
+
+    #[test]
+    fn converges_at_fifth_order_with_accurate_dense_output() {
+        let (coarse, coarse_dense, coarse_counts) = run(1e-6);
+        let (fine, fine_dense, fine_counts) = run(1e-10);
+        assert!(coarse < 1e-5 && fine < 1e-9, "{coarse} {fine}");
+        assert!(
+            coarse_dense < 1e-5 && fine_dense < 1e-9,
+            "{coarse_dense} {fine_dense}"
+        );
+        // 10^4 tighter tolerance costs about 10^(4/5) = 6.3x the steps for a 5th-order method.
+        let ratio = fine_counts.steps as f64 / coarse_counts.steps as f64;
+        assert!((4.0..10.0).contains(&ratio), "step ratio {ratio}");
+        assert_eq!(
+            fine_counts.rhs_evaluations,
+            2 + 6 * (fine_counts.steps + fine_counts.rejected)
+        );
+    }
+}

@@ -1,0 +1,312 @@
+//! Engines integrate a [`Model`] driven by an [`Excitation`] and return a
+//! [`Trajectory`] sampled on a uniform grid. The native engine is the
+//! error-controlled Dormand-Prince 5(4) of [`crate::dopri`], restarted at every
+//! discontinuity of the inputs.
+
+use std::time::Instant;
+
+use fistage_model::{Inputs, Model, Reference, Scenario, Workspace};
+use thiserror::Error;
+
+use crate::dopri::{DormandPrince, OdeSystem, StepFailure, Tolerances};
+use crate::trajectory::{SolverStats, Trajectory};
+
+/// What drives the model's inputs over time.
+pub trait Excitation: Sync {
+    /// The inputs at time t.
+    fn inputs(&self, t: f64) -> Inputs;
+    /// Times where the inputs jump (the engine restarts there).
+    fn breakpoints(&self) -> Vec<f64> {
+        Vec::new()
+    }
+}
+
+/// Inputs given by a scenario: its reference, its platform velocity, no external force.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScenarioExcitation {
+    /// Servo reference.
+    pub reference: Reference,
+    /// Counter-surface velocity, m/s.
+    pub platform_velocity: f64,
+    /// Constant external servo force, N.
+    pub servo_force: f64,
+}
+
+impl ScenarioExcitation {
+    /// The excitation a scenario describes.
+    pub fn from_scenario(scenario: &Scenario) -> Self {
+        Self {
+            reference: scenario.reference.clone(),
+            platform_velocity: scenario.platform_velocity,
+            servo_force: 0.0,
+        }
+    }
+}
+
+impl Excitation for ScenarioExcitation {
+    fn inputs(&self, t: f64) -> Inputs {
+        Inputs {
+            reference: self.reference.sample(t),
+            servo_force: self.servo_force,
+            platform_velocity: self.platform_velocity,
+        }
+    }
+
+    fn breakpoints(&self) -> Vec<f64> {
+        self.reference.breakpoints()
+    }
+}
+
+/// How to integrate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimSettings {
+    /// End time, s (the run starts at 0).
+    pub t_end: f64,
+    /// Output sample interval, s.
+    pub sample_interval: f64,
+    /// Relative tolerance.
+    pub rtol: f64,
+    /// Absolute tolerance of state i is `rtol * atol_scale * nominal_i`.
+    pub atol_scale: f64,
+    /// Largest step, s.
+    pub max_step: Option<f64>,
+    /// Largest number of accepted plus rejected steps.
+    pub max_steps: u64,
+}
+
+impl SimSettings {
+    /// Settings from a scenario file.
+    pub fn from_scenario(scenario: &Scenario) -> Self {
+        Self {
+            t_end: scenario.duration,
+            sample_interval: 1.0 / scenario.sample_rate,
+            rtol: scenario.solver.rtol,
+            atol_scale: scenario.solver.atol_scale,
+            max_step: scenario.solver.max_step,
+            max_steps: scenario.solver.max_steps,
+        }
+    }
+}
+
+/// Why a simulation failed. Each names the simulated time.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum SimError {
+    /// The step size fell below round-off level.
+    #[error("step size underflow at t = {t:.9} s (h = {h:.3e} s){}", cause_text(.non_finite))]
+    StepSizeUnderflow {
+        /// Time reached, s.
+        t: f64,
+        /// Step size, s.
+        h: f64,
+        /// Name of the first state that became non-finite, if that was the cause.
+        non_finite: Option<String>,
+    },
+    /// The step budget ran out.
+    #[error(
+        "gave up at t = {t:.6} s after {steps} steps (raise solver.max_steps or loosen solver.rtol)"
+    )]
+    TooManySteps {
+        /// Time reached, s.
+        t: f64,
+        /// Steps taken.
+        steps: u64,
+    },
+    /// The initial state is not finite or has the wrong length.
+    #[error("invalid initial state: {0}")]
+    InvalidInitialState(String),
+    /// Settings out of range.
+    #[error("invalid settings: {0}")]
+    InvalidSettings(String),
+}
+
+fn cause_text(non_finite: &Option<String>) -> String {
+    match non_finite {
+        Some(name) => format!(": state \"{name}\" became non-finite"),
+        None => ": the solution changes faster than the tolerance allows".into(),
+    }
+}
+
+/// An integration engine.
+pub trait Engine {
+    /// Engine name as used in scenario files.
+    fn name(&self) -> &'static str;
+
+    /// Integrates from `x0` at t = 0; `progress` receives the fraction done.
+    fn simulate(
+        &self,
+        model: &Model,
+        x0: &[f64],
+        excitation: &dyn Excitation,
+        settings: &SimSettings,
+        progress: &mut dyn FnMut(f64),
+    ) -> Result<Trajectory, SimError>;
+}
+
+/// Error-controlled explicit Dormand-Prince 5(4) with dense output.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NativeEngine;
+
+struct ModelSystem<'a> {
+    model: &'a Model,
+    excitation: &'a dyn Excitation,
+    workspace: Workspace,
+}
+
+impl OdeSystem for ModelSystem<'_> {
+    fn dim(&self) -> usize {
+        self.model.n_states()
+    }
+
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
+        let inputs = self.excitation.inputs(t);
+        self.model.rhs(x, &inputs, dx, &mut self.workspace);
+    }
+}
+
+fn check_settings(model: &Model, x0: &[f64], settings: &SimSettings) -> Result<(), SimError> {
+    if x0.len() != model.n_states() {
+        return Err(SimError::InvalidInitialState(format!(
+            "{} entries for {} states",
+            x0.len(),
+            model.n_states()
+        )));
+    }
+    if let Some(i) = x0.iter().position(|v| !v.is_finite()) {
+        return Err(SimError::InvalidInitialState(format!(
+            "\"{}\" is {}",
+            model.layout.names[i], x0[i]
+        )));
+    }
+    let positive = |name: &str, v: f64| {
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err(SimError::InvalidSettings(format!(
+                "{name} must be > 0, got {v}"
+            )))
+        }
+    };
+    positive("t_end", settings.t_end)?;
+    positive("sample_interval", settings.sample_interval)?;
+    positive("rtol", settings.rtol)?;
+    positive("atol_scale", settings.atol_scale)?;
+    if let Some(h) = settings.max_step {
+        positive("max_step", h)?;
+    }
+    Ok(())
+}
+
+/// Sample times k * dt for k = 0..=N with N dt <= t_end (plus t_end itself when
+/// it is not on the grid).
+pub fn sample_times(t_end: f64, dt: f64) -> Vec<f64> {
+    let n = (t_end / dt * (1.0 + 1e-12)).floor() as usize;
+    let mut times: Vec<f64> = (0..=n).map(|k| k as f64 * dt).collect();
+    if let Some(&last) = times.last()
+        && t_end - last > 1e-9 * dt
+    {
+        times.push(t_end);
+    }
+    times
+}
+
+impl Engine for NativeEngine {
+    fn name(&self) -> &'static str {
+        "native"
+    }
+
+    fn simulate(
+        &self,
+        model: &Model,
+        x0: &[f64],
+        excitation: &dyn Excitation,
+        settings: &SimSettings,
+        progress: &mut dyn FnMut(f64),
+    ) -> Result<Trajectory, SimError> {
+        check_settings(model, x0, settings)?;
+        let started = Instant::now();
+        let n = model.n_states();
+        let mut system = ModelSystem {
+            model,
+            excitation,
+            workspace: model.workspace(),
+        };
+        let tolerances = Tolerances {
+            rtol: settings.rtol,
+            atol: model
+                .layout
+                .nominal
+                .iter()
+                .map(|s| s * settings.rtol * settings.atol_scale)
+                .collect(),
+            max_step: settings.max_step.unwrap_or(f64::INFINITY),
+            min_step_relative: 1e-14,
+        };
+        let times = sample_times(settings.t_end, settings.sample_interval);
+        let mut trajectory = Trajectory::with_capacity(n, times.len());
+        trajectory.push(0.0, x0);
+        let mut next_sample = 1;
+        let mut integrator = DormandPrince::new(&mut system, 0.0, x0, tolerances);
+        let mut segment_ends: Vec<f64> = excitation
+            .breakpoints()
+            .into_iter()
+            .filter(|&b| b > 0.0 && b < settings.t_end)
+            .collect();
+        segment_ends.sort_by(f64::total_cmp);
+        segment_ends.dedup();
+        segment_ends.push(settings.t_end);
+        let mut buffer = vec![0.0; n];
+        for (segment, &t_stop) in segment_ends.iter().enumerate() {
+            if segment > 0 {
+                integrator.restart(&mut system);
+            }
+            while integrator.t < t_stop {
+                integrator
+                    .step(&mut system, t_stop)
+                    .map_err(|failure| match failure {
+                        StepFailure::StepSizeUnderflow { t, h, non_finite } => {
+                            SimError::StepSizeUnderflow {
+                                t,
+                                h,
+                                non_finite: non_finite.map(|i| model.layout.names[i].clone()),
+                            }
+                        }
+                    })?;
+                let counts = integrator.counts;
+                if counts.steps + counts.rejected > settings.max_steps {
+                    return Err(SimError::TooManySteps {
+                        t: integrator.t,
+                        steps: counts.steps,
+                    });
+                }
+                while next_sample < times.len()
+                    && times[next_sample] <= integrator.t * (1.0 + 1e-14)
+                {
+                    integrator.interpolate(times[next_sample], &mut buffer);
+                    trajectory.push(times[next_sample], &buffer);
+                    next_sample += 1;
+                }
+                if counts.steps.is_multiple_of(2048) {
+                    progress(integrator.t / settings.t_end);
+                }
+            }
+        }
+        progress(1.0);
+        trajectory.stats = SolverStats {
+            engine: self.name().to_string(),
+            counts: integrator.counts,
+            wall_time_s: started.elapsed().as_secs_f64(),
+        };
+        Ok(trajectory)
+    }
+}
+
+/// The engine a scenario names.
+pub fn engine_by_name(name: &str) -> Option<Box<dyn Engine>> {
+    match name {
+        "native" | "dopri5" => Some(Box::new(NativeEngine)),
+        _ => None,
+    }
+}
+
+/// Names accepted by [`engine_by_name`].
+pub const ENGINE_NAMES: [&str; 1] = ["native"];

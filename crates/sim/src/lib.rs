@@ -1,0 +1,21 @@
+//! fistage-sim: integration engines, trajectories, output signals and their
+//! statistics.
+//!
+//! Data flow: a [`fistage_model::Model`] and an [`Excitation`] go into an
+//! [`Engine`], which returns a [`Trajectory`]; [`Trajectory::signals`] turns it
+//! into named output signals, [`metrics::summarize`] into statistics.
+
+pub mod dopri;
+pub mod engine;
+pub mod metrics;
+pub mod run;
+pub mod trajectory;
+
+pub use dopri::StepCounts;
+pub use engine::{
+    ENGINE_NAMES, Engine, Excitation, NativeEngine, ScenarioExcitation, SimError, SimSettings,
+    engine_by_name, sample_times,
+};
+pub use metrics::{SignalSummary, WindowStats, summarize, window_stats};
+pub use run::{RunError, RunOutput, initial_state, run_scenario};
+pub use trajectory::{SignalTable, SolverStats, Trajectory};

@@ -1,0 +1,104 @@
+//! One scenario run from a loaded study: initial state, engine choice,
+//! integration, output signals and steady-state statistics.
+
+use fistage_model::{LoadError, Loaded, Model, Scenario};
+use thiserror::Error;
+
+use crate::engine::{ENGINE_NAMES, ScenarioExcitation, SimError, SimSettings, engine_by_name};
+use crate::metrics::{SignalSummary, summarize};
+use crate::trajectory::{SignalTable, Trajectory};
+
+/// Why a scenario run failed.
+#[derive(Debug, Error)]
+pub enum RunError {
+    /// The scenario asks for something the model does not have.
+    #[error(transparent)]
+    Scenario(#[from] LoadError),
+    /// The integration failed.
+    #[error("{file}: simulation failed: {source}")]
+    Simulation {
+        /// Scenario file.
+        file: String,
+        /// The engine's error.
+        source: SimError,
+    },
+}
+
+/// Everything a run produces.
+#[derive(Debug, Clone)]
+pub struct RunOutput {
+    /// States on the output grid, with solver statistics.
+    pub trajectory: Trajectory,
+    /// Output signals selected by the scenario (all when it names none).
+    pub signals: SignalTable,
+    /// Statistics of the selected signals over the steady-state window.
+    pub summary: Vec<SignalSummary>,
+}
+
+/// The zero state with the scenario's `[initial]` entries applied.
+pub fn initial_state(model: &Model, scenario: &Scenario) -> Result<Vec<f64>, LoadError> {
+    let mut x = model.zero_state();
+    for (name, value) in &scenario.initial {
+        let index = model.layout.index(name).ok_or_else(|| {
+            scenario.error(
+                format!("initial.{name}"),
+                format!(
+                    "no state of that name (states: {})",
+                    model.layout.names.join(", ")
+                ),
+            )
+        })?;
+        x[index] = *value;
+    }
+    Ok(x)
+}
+
+/// Runs a loaded scenario with the engine it names.
+pub fn run_scenario(loaded: &Loaded, progress: &mut dyn FnMut(f64)) -> Result<RunOutput, RunError> {
+    let scenario = &loaded.scenario;
+    let model = &loaded.model;
+    let engine = engine_by_name(&scenario.solver.engine).ok_or_else(|| {
+        scenario.error(
+            "solver.engine",
+            format!(
+                "unknown engine \"{}\" (available: {})",
+                scenario.solver.engine,
+                ENGINE_NAMES.join(", ")
+            ),
+        )
+    })?;
+    let x0 = initial_state(model, scenario)?;
+    let excitation = ScenarioExcitation::from_scenario(scenario);
+    let settings = SimSettings::from_scenario(scenario);
+    let trajectory = engine
+        .simulate(model, &x0, &excitation, &settings, progress)
+        .map_err(|source| RunError::Simulation {
+            file: scenario.file.display().to_string(),
+            source,
+        })?;
+    let all = trajectory.signals(model, &excitation);
+    let signals = match &scenario.signals {
+        None => all,
+        Some(wanted) => all.select(wanted).map_err(|missing| {
+            scenario.error(
+                "output.signals",
+                format!(
+                    "unknown signal(s) {} (available: {})",
+                    missing.join(", "),
+                    model
+                        .signals
+                        .iter()
+                        .map(|s| s.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            )
+        })?,
+    };
+    let summary = summarize(&signals, scenario.window[0], scenario.window[1]);
+    Ok(RunOutput {
+        trajectory,
+        signals,
+        summary,
+    })
+}
