@@ -1,0 +1,193 @@
+//! Bad robot and scenario files fail with a message naming the file, the
+//! element or key, and the reason.
+
+use std::path::{Path, PathBuf};
+
+use fistage_model::{LoadError, RobotSpec, Scenario, assemble};
+use fistage_tests::path;
+
+fn shipped_robot() -> String {
+    std::fs::read_to_string(path("robots/stage_1dof_fi.urdf")).expect("robot")
+}
+
+fn robot_error(xml: &str) -> String {
+    match RobotSpec::from_str(xml, Path::new("robots/bad.urdf")) {
+        Ok(robot) => {
+            let scenario = Scenario::from_str("robot = \"x\"\nduration = 1\n", Path::new("s.toml"))
+                .expect("scenario");
+            assemble(robot, &scenario)
+                .expect_err("must fail")
+                .to_string()
+        }
+        Err(e) => e.to_string(),
+    }
+}
+
+fn scenario_error(toml: &str) -> String {
+    let robot = RobotSpec::from_str(&shipped_robot(), Path::new("robots/stage_1dof_fi.urdf"))
+        .expect("robot");
+    match Scenario::from_str(toml, Path::new("scenarios/bad.toml")) {
+        Ok(scenario) => assemble(robot, &scenario)
+            .expect_err("must fail")
+            .to_string(),
+        Err(e) => e.to_string(),
+    }
+}
+
+fn assert_mentions(message: &str, parts: &[&str]) {
+    for part in parts {
+        assert!(message.contains(part), "message {message:?} lacks {part:?}");
+    }
+}
+
+#[test]
+fn negative_mass_is_named() {
+    let xml = shipped_robot().replacen("<mass value=\"0.5\"/>", "<mass value=\"-0.5\"/>", 1);
+    let e = robot_error(&xml);
+    assert_eq!(
+        e,
+        "robots/bad.urdf: link \"bearing\": mass must be >= 0, got -0.5"
+    );
+}
+
+#[test]
+fn non_positive_sigma0_is_named() {
+    let xml = shipped_robot().replace("sigma0=\"2.2e6\"", "sigma0=\"0\"");
+    let e = robot_error(&xml);
+    assert_mentions(
+        &e,
+        &[
+            "robots/bad.urdf",
+            "friction \"bearing_friction\"",
+            "sigma0 must be > 0, got 0",
+        ],
+    );
+    let e =
+        scenario_error("robot = \"x\"\nduration = 1\n[overrides.bearing_friction]\nsigma0 = -3\n");
+    assert_eq!(
+        e,
+        "scenarios/bad.toml: overrides.bearing_friction.sigma0: sigma0 must be > 0, got -3"
+    );
+}
+
+#[test]
+fn friction_on_a_missing_link_is_named() {
+    let xml = shipped_robot().replace(
+        "<fistage:friction name=\"bearing_friction\" link=\"bearing\">",
+        "<fistage:friction name=\"bearing_friction\" link=\"bearng\">",
+    );
+    let e = robot_error(&xml);
+    assert_mentions(
+        &e,
+        &[
+            "robots/bad.urdf",
+            "friction \"bearing_friction\"",
+            "link \"bearng\" does not exist",
+        ],
+    );
+}
+
+#[test]
+fn missing_elements_are_named() {
+    let xml = shipped_robot().replace("<axis xyz=\"1 0 0\"/>\n    <lugre", "<lugre");
+    assert_mentions(
+        &robot_error(&xml),
+        &["friction \"bearing_friction\"", "missing <axis"],
+    );
+    let xml = shipped_robot().replace(
+        "<lugre sigma0=\"2.2e6\" sigma1=\"237\"",
+        "<lugre sigma0=\"2.2e6\"",
+    );
+    assert_mentions(
+        &robot_error(&xml),
+        &[
+            "friction \"bearing_friction\"",
+            "missing attribute \"sigma1\"",
+        ],
+    );
+    let e = scenario_error(
+        "robot = \"x\"\nduration = 1\n[controller]\nsensor = \"encodr\"\nactuator = \"drive\"\nk = 1\nc = 1\n",
+    );
+    assert_mentions(
+        &e,
+        &[
+            "scenarios/bad.toml",
+            "controller.sensor",
+            "no sensor named \"encodr\"",
+            "encoder",
+        ],
+    );
+    let e = scenario_error("robot = \"x\"\n");
+    assert_mentions(&e, &["scenarios/bad.toml", "missing field `duration`"]);
+    let e = scenario_error(
+        "robot = \"x\"\nduration = 1\n[controller]\nsensor = \"encoder\"\nk = 1\nc = 1\n",
+    );
+    assert_mentions(&e, &["scenarios/bad.toml", "missing field `actuator`"]);
+    let xml = shipped_robot().replace("<link name=\"world\"/>", "");
+    assert_mentions(
+        &robot_error(&xml),
+        &["robots/bad.urdf", "no link named \"world\""],
+    );
+}
+
+#[test]
+fn unknown_keys_are_named() {
+    let e = scenario_error(
+        "robot = \"x\"\nduration = 1\n[controller]\nsensor = \"encoder\"\nactuator = \"drive\"\nk = 1\nc = 1\nkd = 3\n",
+    );
+    assert_mentions(&e, &["scenarios/bad.toml", "kd"]);
+    let e = scenario_error("robot = \"x\"\nduration = 1\n[overrides.bearing_friction]\nmu = 0.3\n");
+    assert_mentions(&e, &["overrides.bearing_friction.mu", "sigma0, sigma1"]);
+    let e = scenario_error("robot = \"x\"\nduration = 1\n[overrides.no_such_bearing]\nf_c = 3\n");
+    assert_mentions(
+        &e,
+        &["overrides.no_such_bearing", "no element or link named"],
+    );
+    let xml = shipped_robot().replace(
+        "<stiffness xyz=\"40000 0 0\" rpy=\"0 0 0\"/>",
+        "<stiffness xyz=\"40000 0 0\" rpy=\"0 0 0\" units=\"N/m\"/>",
+    );
+    assert_mentions(
+        &robot_error(&xml),
+        &["isolator \"isolator\"", "unknown attribute \"units\""],
+    );
+    let xml = shipped_robot()
+        .replace(
+            "<fistage:sensor name=\"encoder\"",
+            "<fistage:probe name=\"encoder\"",
+        )
+        .replace("</fistage:sensor>", "</fistage:probe>");
+    assert_mentions(&robot_error(&xml), &["fistage:probe", "unknown element"]);
+}
+
+#[test]
+fn malformed_files_are_named_with_position() {
+    let xml = shipped_robot().replace("</robot>", "");
+    let e = robot_error(&xml);
+    assert_mentions(&e, &["robots/bad.urdf", "malformed XML"]);
+    let e = scenario_error("robot = \"x\"\nduration = = 1\n");
+    assert_mentions(&e, &["scenarios/bad.toml", "line 2"]);
+}
+
+#[test]
+fn missing_files_and_bad_trees_are_named() {
+    let dir = std::env::temp_dir().join(format!("fistage-bad-input-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let scenario: PathBuf = dir.join("s.toml");
+    std::fs::write(&scenario, "robot = \"missing.urdf\"\nduration = 1\n").expect("write");
+    let e = fistage_model::load(&scenario).expect_err("must fail");
+    assert!(matches!(e, LoadError::Io { .. }));
+    assert_mentions(&e.to_string(), &["missing.urdf", "cannot read"]);
+    std::fs::remove_dir_all(&dir).ok();
+
+    // A link not connected to the world.
+    let xml = shipped_robot().replace(
+        "<parent link=\"world\"/>\n    <child link=\"bearing\"/>",
+        "<parent link=\"bearing\"/>\n    <child link=\"bearing\"/>",
+    );
+    let e = robot_error(&xml);
+    assert_mentions(&e, &["link \"bearing\""]);
+    // A moving link without mass.
+    let xml = shipped_robot().replacen("<mass value=\"1.0\"/>", "<mass value=\"0\"/>", 1);
+    assert_mentions(&robot_error(&xml), &["link \"table\"", "no mass"]);
+}
