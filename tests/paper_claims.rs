@@ -79,6 +79,7 @@ fn fig10_limit_cycle_with_fi() {
         "FI motion is periodic"
     );
     let rigid = peak_to_peak(&run_paper("fig10_rigid").1, TABLE);
+    println!("Fig. 10: table peak-to-peak FI {amplitude:.4e} m, rigid {rigid:.4e} m");
     assert!(rigid < 1e-9, "rigid stage settles: {rigid:e}");
 }
 
@@ -108,6 +109,15 @@ fn fig12_integral_action() {
     let (loaded, ki5e6) = run_paper("fig12_ki5e6");
     assert!(peak_to_peak(&ki5e6, TABLE) > 1e-4);
     let irregular = maxima_spread(&ki5e6, loaded.scenario.window[0]);
+    println!(
+        "Fig. 12: k_i = 0 offset {:.4e} m; k_i = 1e5 mean {:.3e} m, p2p {:.3e} m; \
+         k_i = 1e6 p2p {:.4e} m, maxima spread {regular:.2e}; k_i = 5e6 p2p {:.4e} m, maxima spread {irregular:.2e}",
+        offset.mean,
+        removed.mean,
+        removed.peak_to_peak,
+        peak_to_peak(&ki1e6, TABLE),
+        peak_to_peak(&ki5e6, TABLE)
+    );
     assert!(irregular > 0.1, "k_i = 5e6 maxima spread {irregular}");
 }
 
@@ -135,6 +145,7 @@ fn fig13_stiction_at_reversals() {
     let (loaded, at_rest) = run_paper("fig13_vp0");
     let from = loaded.scenario.window[0];
     let stuck = stuck_time(&at_rest, from, threshold);
+    println!("Fig. 13: bearing stuck {stuck:.3} s of the last 10 s with the platform at rest");
     // A sliding sinusoid spends only 2 * 0.02 / pi = 1.3% of the time that slow.
     assert!(
         stuck > 1.0,
@@ -142,6 +153,7 @@ fn fig13_stiction_at_reversals() {
     );
     let (_, moving) = run_paper("fig13_vp1");
     let stuck = stuck_time(&moving, from, threshold);
+    println!("Fig. 13: bearing stuck {stuck:.3} s of the last 10 s with the platform at 1 mm/s");
     assert_eq!(
         stuck, 0.0,
         "bearing never sticks with the platform at 1 mm/s"

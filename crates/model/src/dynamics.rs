@@ -531,6 +531,7 @@ pub(crate) fn bushing_force(stiffness: f64, damping: f64, deflection: f64, rate:
 /// PID servo law: writes the actuator forces and the tracking error from the
 /// sensor readings already in `elements`. The external servo force input is added
 /// to the controller's actuator (to the first actuator when there is no controller).
+#[inline]
 pub(crate) fn servo_force(model: &Model, x: &[f64], inputs: &Inputs, elements: &mut ElementValues) {
     elements.actuator_force.fill(0.0);
     elements.reference = inputs.reference;

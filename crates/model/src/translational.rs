@@ -17,8 +17,10 @@ pub(crate) struct TranslationalMap {
     mass_inverse: Vec<f64>,
     gravity: Vec<f64>,
     friction_rows: Vec<f64>,
+    /// Translational bushing axes with stiffness or damping: (stiffness, damping,
+    /// deflection offset, row start in `isolator_rows`).
+    isolator_axes: Vec<(f64, f64, f64, usize)>,
     isolator_rows: Vec<f64>,
-    isolator_offsets: Vec<[f64; 3]>,
     sensor_rows: Vec<f64>,
     sensor_offsets: Vec<f64>,
     actuator_rows: Vec<f64>,
@@ -46,19 +48,23 @@ impl TranslationalMap {
                 .collect(),
             gravity: vec![0.0; nv],
             friction_rows: vec![0.0; nf * nv],
+            isolator_axes: Vec::new(),
             isolator_rows: vec![0.0; 3 * ni * nv],
-            isolator_offsets: Vec::new(),
             sensor_rows: vec![0.0; ns * nv],
             sensor_offsets: Vec::new(),
             actuator_rows: vec![0.0; na * nv],
         };
         model.evaluate(&zero, &inputs, &mut ws);
-        map.isolator_offsets = ws
-            .elements
-            .isolator_deflection
-            .iter()
-            .map(|d| [d[0], d[1], d[2]])
-            .collect();
+        for (k, isolator) in model.isolators.iter().enumerate() {
+            for axis in 0..3 {
+                let (stiffness, damping) = (isolator.stiffness[axis], isolator.damping[axis]);
+                if stiffness != 0.0 || damping != 0.0 {
+                    let offset = ws.elements.isolator_deflection[k][axis];
+                    map.isolator_axes
+                        .push((stiffness, damping, offset, (3 * k + axis) * nv));
+                }
+            }
+        }
         map.sensor_offsets = ws.elements.sensor_position.clone();
         for j in 0..nv {
             let mut x = zero.clone();
@@ -113,18 +119,10 @@ impl TranslationalMap {
             axpy(-f, row, force);
             dx[friction.z_index] = z_rate;
         }
-        for (k, isolator) in model.isolators.iter().enumerate() {
-            for axis in 0..3 {
-                let row = &self.isolator_rows[(3 * k + axis) * nv..(3 * k + axis + 1) * nv];
-                let deflection = self.isolator_offsets[k][axis] + dot(row, q);
-                let f = bushing_force(
-                    isolator.stiffness[axis],
-                    isolator.damping[axis],
-                    deflection,
-                    dot(row, v),
-                );
-                axpy(f, row, force);
-            }
+        for &(stiffness, damping, offset, start) in &self.isolator_axes {
+            let row = &self.isolator_rows[start..start + nv];
+            let f = bushing_force(stiffness, damping, offset + dot(row, q), dot(row, v));
+            axpy(f, row, force);
         }
         let elements = &mut ws.elements;
         for k in 0..model.sensors.len() {

@@ -103,7 +103,7 @@ pub struct DormandPrince {
     dense: [Vec<f64>; 5],
     t_previous: f64,
     h_previous: f64,
-    error_previous: f64,
+    log_error_previous: f64,
     /// Counters.
     pub counts: StepCounts,
     non_finite: Option<usize>,
@@ -134,7 +134,7 @@ impl DormandPrince {
             dense: [zeros(), zeros(), zeros(), zeros(), zeros()],
             t_previous: t0,
             h_previous: 0.0,
-            error_previous: 1e-4,
+            log_error_previous: 1e-4f64.ln(),
             counts: StepCounts::default(),
             non_finite: None,
         };
@@ -149,7 +149,7 @@ impl DormandPrince {
     pub fn restart(&mut self, system: &mut dyn OdeSystem) {
         system.rhs(self.t, &self.x, &mut self.k[0]);
         self.counts.rhs_evaluations += 1;
-        self.error_previous = 1e-4;
+        self.log_error_previous = 1e-4f64.ln();
     }
 
     fn scale(&self, i: usize, a: f64, b: f64) -> f64 {
@@ -217,9 +217,12 @@ impl DormandPrince {
                 let factor = if error == 0.0 {
                     10.0
                 } else {
-                    (SAFETY * error.powf(-ALPHA) * self.error_previous.powf(BETA)).clamp(0.2, 10.0)
+                    let log_error = error.ln();
+                    let factor =
+                        SAFETY * (BETA * self.log_error_previous - ALPHA * log_error).exp();
+                    factor.clamp(0.2, 10.0)
                 };
-                self.error_previous = error.max(1e-4);
+                self.log_error_previous = error.max(1e-4).ln();
                 self.accept(h);
                 self.h = h * factor;
                 return Ok(());
