@@ -68,7 +68,7 @@ fn fi_stage_matches_paper_eq2() {
             };
             model.rhs(&x, &inputs, &mut dx, &mut ws);
             let mut general = vec![0.0; model.n_states()];
-            model.rhs_general(&x, &inputs, &mut general, &mut ws);
+            model.rhs_general(&x, &inputs.values(), &mut general, &mut ws);
             for (a, b) in dx.iter().zip(&general) {
                 assert!(close(*a, *b), "fast path {a} vs general {b}");
             }
@@ -139,7 +139,7 @@ fn rigid_stage_matches_paper_eq3() {
         };
         model.rhs(&x, &inputs, &mut dx, &mut ws);
         let mut general = vec![0.0; model.n_states()];
-        model.rhs_general(&x, &inputs, &mut general, &mut ws);
+        model.rhs_general(&x, &inputs.values(), &mut general, &mut ws);
         for (a, b) in dx.iter().zip(&general) {
             assert!(close(*a, *b), "fast path {a} vs general {b}");
         }

@@ -11,63 +11,104 @@
 //! body Jacobians. Every joint is a set of unit axes, linear or angular: a
 //! prismatic joint is one linear axis, a revolute joint one angular axis, a
 //! floating joint three of each.
+//!
+//! Everything is generic over [`Scalar`], so the same code runs in `f64` and in
+//! dual numbers for the exact Jacobian ([`crate::linearize`]).
 
-use nalgebra::{DMatrix, DVector, Matrix3, Quaternion, Rotation3, UnitQuaternion, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix3, Quaternion, Rotation3, Unit, UnitQuaternion, Vector3};
 
 use crate::model::{Frame, Inputs, JointMotion, Model};
 use crate::reference::ReferenceSample;
+use crate::scalar::Scalar;
+
+/// Model inputs in any scalar type (see [`Inputs`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InputValues<S> {
+    /// Reference position, m.
+    pub reference_position: S,
+    /// Reference velocity, m/s.
+    pub reference_velocity: S,
+    /// External servo force, N.
+    pub servo_force: S,
+    /// Counter-surface velocity, m/s.
+    pub platform_velocity: S,
+}
+
+impl Inputs {
+    /// The inputs as constants of scalar type S.
+    pub fn values<S: Scalar>(&self) -> InputValues<S> {
+        InputValues {
+            reference_position: S::constant(self.reference.position),
+            reference_velocity: S::constant(self.reference.velocity),
+            servo_force: S::constant(self.servo_force),
+            platform_velocity: S::constant(self.platform_velocity),
+        }
+    }
+}
 
 /// Scratch space for evaluating a model without allocating. One per thread.
 #[derive(Debug, Clone)]
-pub struct Workspace {
-    rotation: Vec<Matrix3<f64>>,
-    origin: Vec<Vector3<f64>>,
-    omega: Vec<Vector3<f64>>,
-    velocity: Vec<Vector3<f64>>,
-    bias_alpha: Vec<Vector3<f64>>,
-    bias_accel: Vec<Vector3<f64>>,
-    dof_axis: Vec<Vector3<f64>>,
-    dof_center: Vec<Vector3<f64>>,
+pub struct Workspace<S: Scalar = f64> {
+    rotation: Vec<Matrix3<S>>,
+    origin: Vec<Vector3<S>>,
+    omega: Vec<Vector3<S>>,
+    velocity: Vec<Vector3<S>>,
+    bias_alpha: Vec<Vector3<S>>,
+    bias_accel: Vec<Vector3<S>>,
+    dof_axis: Vec<Vector3<S>>,
+    dof_center: Vec<Vector3<S>>,
     dof_angular: Vec<bool>,
-    force: Vec<Vector3<f64>>,
-    moment: Vec<Vector3<f64>>,
-    jacobian: Vec<(Vector3<f64>, Vector3<f64>)>,
-    mass: DMatrix<f64>,
-    tau: DVector<f64>,
-    scratch: DVector<f64>,
+    force: Vec<Vector3<S>>,
+    moment: Vec<Vector3<S>>,
+    jacobian: Vec<(Vector3<S>, Vector3<S>)>,
+    mass: DMatrix<S>,
+    tau: DVector<S>,
     pub(crate) generalized: Vec<f64>,
     /// Per-element results of the last evaluation.
-    pub elements: ElementValues,
+    pub elements: ElementValues<S>,
 }
 
 /// Values of the force elements at the last evaluated state.
 #[derive(Debug, Clone, Default)]
-pub struct ElementValues {
+pub struct ElementValues<S = f64> {
     /// LuGre friction force per contact (positive opposes positive sliding), N.
-    pub friction_force: Vec<f64>,
+    pub friction_force: Vec<S>,
     /// Sliding velocity per contact, m/s.
-    pub slip_velocity: Vec<f64>,
+    pub slip_velocity: Vec<S>,
     /// Bristle rate z' per contact, m/s.
-    pub z_rate: Vec<f64>,
+    pub z_rate: Vec<S>,
     /// Force per actuator, N.
-    pub actuator_force: Vec<f64>,
+    pub actuator_force: Vec<S>,
     /// Reading per sensor, m.
-    pub sensor_position: Vec<f64>,
+    pub sensor_position: Vec<S>,
     /// Rate per sensor, m/s.
-    pub sensor_velocity: Vec<f64>,
+    pub sensor_velocity: Vec<S>,
     /// Deflection per isolator: translation (m) then rotation vector (rad), attach axes.
-    pub isolator_deflection: Vec<[f64; 6]>,
+    pub isolator_deflection: Vec<[S; 6]>,
     /// Deflection rate per isolator.
-    pub isolator_rate: Vec<[f64; 6]>,
+    pub isolator_rate: Vec<[S; 6]>,
     /// Reference used by the controller.
     pub reference: ReferenceSample,
     /// Tracking error x - x_r of the controller, m.
-    pub tracking_error: f64,
+    pub tracking_error: S,
+}
+
+fn cast3<S: Scalar>(v: &Vector3<f64>) -> Vector3<S> {
+    Vector3::new(S::constant(v.x), S::constant(v.y), S::constant(v.z))
+}
+
+fn cast33<S: Scalar>(m: &Matrix3<f64>) -> Matrix3<S> {
+    Matrix3::from_fn(|r, c| S::constant(m[(r, c)]))
 }
 
 impl Model {
-    /// A workspace sized for this model.
-    pub fn workspace(&self) -> Workspace {
+    /// A workspace sized for this model, for `f64` evaluation.
+    pub fn workspace(&self) -> Workspace<f64> {
+        self.workspace_of()
+    }
+
+    /// A workspace sized for this model, for any scalar type.
+    pub fn workspace_of<S: Scalar>(&self) -> Workspace<S> {
         let nb = self.bodies.len();
         let nv = self.layout.nv;
         let zeros = || vec![Vector3::zeros(); nb];
@@ -80,6 +121,12 @@ impl Model {
                 JointMotion::Floating => dof_angular[v0 + 3..v0 + 6].fill(true),
             }
         }
+        let (nf, ni, na, ns) = (
+            self.frictions.len(),
+            self.isolators.len(),
+            self.actuators.len(),
+            self.sensors.len(),
+        );
         Workspace {
             rotation: vec![Matrix3::identity(); nb],
             origin: zeros(),
@@ -95,19 +142,18 @@ impl Model {
             jacobian: Vec::with_capacity(nv),
             mass: DMatrix::zeros(nv, nv),
             tau: DVector::zeros(nv),
-            scratch: DVector::zeros(nv),
             generalized: vec![0.0; nv],
             elements: ElementValues {
-                friction_force: vec![0.0; self.frictions.len()],
-                slip_velocity: vec![0.0; self.frictions.len()],
-                z_rate: vec![0.0; self.frictions.len()],
-                actuator_force: vec![0.0; self.actuators.len()],
-                sensor_position: vec![0.0; self.sensors.len()],
-                sensor_velocity: vec![0.0; self.sensors.len()],
-                isolator_deflection: vec![[0.0; 6]; self.isolators.len()],
-                isolator_rate: vec![[0.0; 6]; self.isolators.len()],
+                friction_force: vec![S::zero(); nf],
+                slip_velocity: vec![S::zero(); nf],
+                z_rate: vec![S::zero(); nf],
+                actuator_force: vec![S::zero(); na],
+                sensor_position: vec![S::zero(); ns],
+                sensor_velocity: vec![S::zero(); ns],
+                isolator_deflection: vec![[S::zero(); 6]; ni],
+                isolator_rate: vec![[S::zero(); 6]; ni],
                 reference: ReferenceSample::default(),
-                tracking_error: 0.0,
+                tracking_error: S::zero(),
             },
         }
     }
@@ -118,13 +164,19 @@ impl Model {
     pub fn rhs(&self, x: &[f64], inputs: &Inputs, dx: &mut [f64], ws: &mut Workspace) {
         match &self.translational_map {
             Some(map) => map.rhs(self, x, inputs, dx, ws),
-            None => self.rhs_general(x, inputs, dx, ws),
+            None => self.rhs_general(x, &inputs.values(), dx, ws),
         }
     }
 
-    /// State derivative by the general recursive dynamics, for any model.
-    pub fn rhs_general(&self, x: &[f64], inputs: &Inputs, dx: &mut [f64], ws: &mut Workspace) {
-        self.evaluate(x, inputs, ws);
+    /// State derivative by the general recursive dynamics, for any model and scalar.
+    pub fn rhs_general<S: Scalar>(
+        &self,
+        x: &[S],
+        inputs: &InputValues<S>,
+        dx: &mut [S],
+        ws: &mut Workspace<S>,
+    ) {
+        self.evaluate_values(x, inputs, ws);
         self.position_rates(x, dx);
         self.accelerations(ws);
         let nq = self.layout.nq;
@@ -140,6 +192,11 @@ impl Model {
 
     /// Kinematics and force elements at state x; results stay in `ws`.
     pub fn evaluate(&self, x: &[f64], inputs: &Inputs, ws: &mut Workspace) {
+        ws.elements.reference = inputs.reference;
+        self.evaluate_values(x, &inputs.values(), ws);
+    }
+
+    fn evaluate_values<S: Scalar>(&self, x: &[S], inputs: &InputValues<S>, ws: &mut Workspace<S>) {
         self.kinematics(x, ws);
         ws.force.fill(Vector3::zeros());
         ws.moment.fill(Vector3::zeros());
@@ -221,54 +278,41 @@ impl Model {
     }
 
     /// Forward pass: poses, twists, bias accelerations and joint axes in world coordinates.
-    fn kinematics(&self, x: &[f64], ws: &mut Workspace) {
+    fn kinematics<S: Scalar>(&self, x: &[S], ws: &mut Workspace<S>) {
         let nq = self.layout.nq;
         for (i, body) in self.bodies.iter().enumerate() {
-            let (
-                parent_rotation,
-                parent_origin,
-                parent_omega,
-                parent_velocity,
-                parent_alpha,
-                parent_accel,
-            ) = match body.parent {
-                Some(p) => (
-                    ws.rotation[p],
-                    ws.origin[p],
-                    ws.omega[p],
-                    ws.velocity[p],
-                    ws.bias_alpha[p],
-                    ws.bias_accel[p],
-                ),
-                None => (
-                    Matrix3::identity(),
-                    Vector3::zeros(),
-                    Vector3::zeros(),
-                    Vector3::zeros(),
-                    Vector3::zeros(),
-                    Vector3::zeros(),
-                ),
-            };
+            let zero = Vector3::zeros();
+            let (parent_rotation, parent_origin, parent_omega, parent_velocity, parent_alpha, parent_accel) =
+                match body.parent {
+                    Some(p) => (
+                        ws.rotation[p],
+                        ws.origin[p],
+                        ws.omega[p],
+                        ws.velocity[p],
+                        ws.bias_alpha[p],
+                        ws.bias_accel[p],
+                    ),
+                    None => (Matrix3::identity(), zero, zero, zero, zero, zero),
+                };
             let joint = &body.joint;
-            let joint_rotation = parent_rotation * joint.origin_rotation;
-            let joint_origin = parent_origin + parent_rotation * joint.origin.translation.vector;
+            let joint_rotation = parent_rotation * cast33::<S>(&joint.origin_rotation);
+            let joint_origin = parent_origin + parent_rotation * cast3::<S>(&joint.origin.translation.vector);
             let (q0, v0) = (joint.q_offset, joint.v_offset);
             let mut linear_rate = Vector3::zeros();
             let mut angular_rate = Vector3::zeros();
             let (rotation, origin) = match joint.motion {
                 JointMotion::Prismatic { axis } => {
-                    let s = joint_rotation * axis;
+                    let s = joint_rotation * cast3::<S>(&axis);
                     ws.dof_axis[v0] = s;
                     linear_rate = s * x[nq + v0];
                     (joint_rotation, joint_origin + s * x[q0])
                 }
                 JointMotion::Revolute { axis } => {
-                    let s = joint_rotation * axis;
+                    let s = joint_rotation * cast3::<S>(&axis);
                     ws.dof_axis[v0] = s;
                     ws.dof_center[v0] = joint_origin;
                     angular_rate = s * x[nq + v0];
-                    let turn =
-                        Rotation3::from_axis_angle(&nalgebra::Unit::new_unchecked(axis), x[q0]);
+                    let turn = Rotation3::from_axis_angle(&Unit::new_unchecked(cast3::<S>(&axis)), x[q0]);
                     (joint_rotation * turn.matrix(), joint_origin)
                 }
                 JointMotion::Floating => {
@@ -287,6 +331,7 @@ impl Model {
                 }
             };
             let r = origin - parent_origin;
+            let two = S::constant(2.0);
             ws.rotation[i] = rotation;
             ws.origin[i] = origin;
             ws.omega[i] = parent_omega + angular_rate;
@@ -295,56 +340,17 @@ impl Model {
             ws.bias_accel[i] = parent_accel
                 + parent_alpha.cross(&r)
                 + parent_omega.cross(&parent_omega.cross(&r))
-                + 2.0 * parent_omega.cross(&linear_rate);
+                + parent_omega.cross(&linear_rate) * two;
         }
     }
 
-    /// World position and velocity of a point given in a body frame.
-    fn point_state(
-        &self,
-        frame: Frame,
-        point: &Vector3<f64>,
-        ws: &Workspace,
-    ) -> (Vector3<f64>, Vector3<f64>) {
-        match frame {
-            Frame::World => (*point, Vector3::zeros()),
-            Frame::Body(b) => {
-                let r = ws.rotation[b] * point;
-                (ws.origin[b] + r, ws.velocity[b] + ws.omega[b].cross(&r))
-            }
-        }
-    }
-
-    fn frame_rotation(&self, frame: Frame, ws: &Workspace) -> Matrix3<f64> {
-        match frame {
-            Frame::World => Matrix3::identity(),
-            Frame::Body(b) => ws.rotation[b],
-        }
-    }
-
-    fn frame_omega(&self, frame: Frame, ws: &Workspace) -> Vector3<f64> {
-        match frame {
-            Frame::World => Vector3::zeros(),
-            Frame::Body(b) => ws.omega[b],
-        }
-    }
-
-    fn isolator_forces(&self, ws: &mut Workspace) {
+    fn isolator_forces<S: Scalar>(&self, ws: &mut Workspace<S>) {
         for (k, isolator) in self.isolators.iter().enumerate() {
-            let parent_rotation =
-                self.frame_rotation(isolator.parent, ws) * isolator.attach_rotations[0];
-            let child_rotation =
-                self.frame_rotation(isolator.child, ws) * isolator.attach_rotations[1];
-            let (parent_point, _) = self.point_state(
-                isolator.parent,
-                &isolator.parent_attach.translation.vector,
-                ws,
-            );
-            let (child_point, child_point_velocity) = self.point_state(
-                isolator.child,
-                &isolator.child_attach.translation.vector,
-                ws,
-            );
+            let parent_rotation = frame_rotation(isolator.parent, ws) * cast33::<S>(&isolator.attach_rotations[0]);
+            let child_rotation = frame_rotation(isolator.child, ws) * cast33::<S>(&isolator.attach_rotations[1]);
+            let (parent_point, _) = point_state(isolator.parent, &isolator.parent_attach.translation.vector, ws);
+            let (child_point, child_point_velocity) =
+                point_state(isolator.child, &isolator.child_attach.translation.vector, ws);
             // Velocity of the parent's material point that coincides with the child attach point.
             let parent_velocity_there = match isolator.parent {
                 Frame::World => Vector3::zeros(),
@@ -354,10 +360,11 @@ impl Model {
             let translation = to_local * (child_point - parent_point);
             let translation_rate = to_local * (child_point_velocity - parent_velocity_there);
             let rotation = rotation_log(&(to_local * child_rotation));
-            let rotation_rate = to_local
-                * (self.frame_omega(isolator.child, ws) - self.frame_omega(isolator.parent, ws));
+            let rotation_rate = to_local * (frame_omega(isolator.child, ws) - frame_omega(isolator.parent, ws));
             let (k_, c_) = (&isolator.stiffness, &isolator.damping);
-            let law = |axis: usize, d: f64, rate: f64| bushing_force(k_[axis], c_[axis], d, rate);
+            let law = |axis: usize, d: S, rate: S| {
+                -(S::constant(k_[axis]) * d + S::constant(c_[axis]) * rate)
+            };
             let local_force = Vector3::new(
                 law(0, translation.x, translation_rate.x),
                 law(1, translation.y, translation_rate.y),
@@ -372,14 +379,8 @@ impl Model {
             let torque = parent_rotation * local_torque;
             apply_wrench(ws, isolator.child, &child_point, &force, &torque);
             apply_wrench(ws, isolator.parent, &child_point, &-force, &-torque);
-            ws.elements.isolator_deflection[k] = [
-                translation.x,
-                translation.y,
-                translation.z,
-                rotation.x,
-                rotation.y,
-                rotation.z,
-            ];
+            ws.elements.isolator_deflection[k] =
+                [translation.x, translation.y, translation.z, rotation.x, rotation.y, rotation.z];
             ws.elements.isolator_rate[k] = [
                 translation_rate.x,
                 translation_rate.y,
@@ -391,55 +392,52 @@ impl Model {
         }
     }
 
-    fn friction_forces(&self, x: &[f64], inputs: &Inputs, ws: &mut Workspace) {
+    fn friction_forces<S: Scalar>(&self, x: &[S], inputs: &InputValues<S>, ws: &mut Workspace<S>) {
         for (k, friction) in self.frictions.iter().enumerate() {
             let frame = Frame::Body(friction.body);
-            let (point, point_velocity) = self.point_state(frame, &friction.point, ws);
-            let slip = point_velocity.dot(&friction.axis) - inputs.platform_velocity;
-            let (force, z_rate) = friction.lugre.force_and_z_rate(slip, x[friction.z_index]);
-            apply_wrench(
-                ws,
-                frame,
-                &point,
-                &(-force * friction.axis),
-                &Vector3::zeros(),
-            );
+            let axis = cast3::<S>(&friction.axis);
+            let (point, point_velocity) = point_state(frame, &friction.point, ws);
+            let slip = point_velocity.dot(&axis) - inputs.platform_velocity;
+            let (force, z_rate) = friction.lugre.force_and_z_rate_of(slip, x[friction.z_index]);
+            apply_wrench(ws, frame, &point, &(axis * -force), &Vector3::zeros());
             ws.elements.friction_force[k] = force;
             ws.elements.slip_velocity[k] = slip;
             ws.elements.z_rate[k] = z_rate;
         }
     }
 
-    fn sensors_and_servo(&self, x: &[f64], inputs: &Inputs, ws: &mut Workspace) {
+    fn sensors_and_servo<S: Scalar>(&self, x: &[S], inputs: &InputValues<S>, ws: &mut Workspace<S>) {
         for (k, sensor) in self.sensors.iter().enumerate() {
-            let (point, velocity) = self.point_state(Frame::Body(sensor.body), &sensor.point, ws);
-            ws.elements.sensor_position[k] = point.dot(&sensor.axis) - sensor.zero_offset;
-            ws.elements.sensor_velocity[k] = velocity.dot(&sensor.axis);
+            let axis = cast3::<S>(&sensor.axis);
+            let (point, velocity) = point_state(Frame::Body(sensor.body), &sensor.point, ws);
+            ws.elements.sensor_position[k] = point.dot(&axis) - S::constant(sensor.zero_offset);
+            ws.elements.sensor_velocity[k] = velocity.dot(&axis);
         }
         servo_force(self, x, inputs, &mut ws.elements);
         for (k, actuator) in self.actuators.iter().enumerate() {
             let frame = Frame::Body(actuator.body);
-            let (point, _) = self.point_state(frame, &actuator.point, ws);
-            let force = ws.elements.actuator_force[k] * actuator.axis;
+            let (point, _) = point_state(frame, &actuator.point, ws);
+            let force = cast3::<S>(&actuator.axis) * ws.elements.actuator_force[k];
             apply_wrench(ws, frame, &point, &force, &Vector3::zeros());
         }
     }
 
     /// Backward pass and solve: leaves the joint accelerations in `ws.tau`.
-    fn accelerations(&self, ws: &mut Workspace) {
+    fn accelerations<S: Scalar>(&self, ws: &mut Workspace<S>) {
         let nb = self.bodies.len();
+        let gravity = cast3::<S>(&self.gravity);
         // Wrench each body needs from its joint for zero joint accelerations.
         for i in 0..nb {
             let body = &self.bodies[i];
-            let r = ws.rotation[i] * body.com;
+            let r = ws.rotation[i] * cast3::<S>(&body.com);
             let com = ws.origin[i] + r;
             let omega = ws.omega[i];
             let alpha = ws.bias_alpha[i];
             let accel_com = ws.bias_accel[i] + alpha.cross(&r) + omega.cross(&omega.cross(&r));
-            let inertial_force = body.mass * (accel_com - self.gravity);
+            let inertial_force = (accel_com - gravity) * S::constant(body.mass);
             let mut inertial_moment = com.cross(&inertial_force);
             if !self.translational {
-                let inertia = ws.rotation[i] * body.inertia * ws.rotation[i].transpose();
+                let inertia = ws.rotation[i] * cast33::<S>(&body.inertia) * ws.rotation[i].transpose();
                 inertial_moment += inertia * alpha + omega.cross(&(inertia * omega));
             }
             ws.force[i] = inertial_force - ws.force[i];
@@ -465,11 +463,11 @@ impl Model {
         match &self.constant_mass_inverse {
             Some(inverse) => {
                 let nv = self.layout.nv;
-                ws.scratch.copy_from(&ws.tau);
+                let tau: Vec<S> = ws.tau.iter().copied().collect();
                 for row in 0..nv {
-                    ws.tau[row] = (0..nv)
-                        .map(|col| inverse[(row, col)] * ws.scratch[col])
-                        .sum();
+                    ws.tau[row] = (0..nv).fold(S::zero(), |sum, col| {
+                        sum + S::constant(inverse[(row, col)]) * tau[col]
+                    });
                 }
             }
             None => {
@@ -482,7 +480,7 @@ impl Model {
                     }
                     None => {
                         // Singular only for degenerate configurations: make it visible.
-                        ws.tau.fill(f64::NAN);
+                        ws.tau.fill(S::constant(f64::NAN));
                         ws.mass = DMatrix::zeros(self.layout.nv, self.layout.nv);
                     }
                 }
@@ -491,8 +489,9 @@ impl Model {
     }
 
     /// Position-coordinate rates: joint velocities, and quaternion rates for floating joints.
-    fn position_rates(&self, x: &[f64], dx: &mut [f64]) {
+    fn position_rates<S: Scalar>(&self, x: &[S], dx: &mut [S]) {
         let nq = self.layout.nq;
+        let half = S::constant(0.5);
         for body in &self.bodies {
             let (q0, v0) = (body.joint.q_offset, nq + body.joint.v_offset);
             match body.joint.motion {
@@ -500,8 +499,8 @@ impl Model {
                 JointMotion::Floating => {
                     dx[q0..q0 + 3].copy_from_slice(&x[v0..v0 + 3]);
                     let q = Quaternion::new(x[q0 + 3], x[q0 + 4], x[q0 + 5], x[q0 + 6]);
-                    let w = Quaternion::new(0.0, x[v0 + 3], x[v0 + 4], x[v0 + 5]);
-                    let rate = (w * q) * 0.5;
+                    let w = Quaternion::new(S::zero(), x[v0 + 3], x[v0 + 4], x[v0 + 5]);
+                    let rate = (w * q) * half;
                     dx[q0 + 3] = rate.w;
                     dx[q0 + 4] = rate.i;
                     dx[q0 + 5] = rate.j;
@@ -512,14 +511,35 @@ impl Model {
     }
 }
 
+/// World position and velocity of a point given in a body frame.
+fn point_state<S: Scalar>(frame: Frame, point: &Vector3<f64>, ws: &Workspace<S>) -> (Vector3<S>, Vector3<S>) {
+    let point = cast3::<S>(point);
+    match frame {
+        Frame::World => (point, Vector3::zeros()),
+        Frame::Body(b) => {
+            let r = ws.rotation[b] * point;
+            (ws.origin[b] + r, ws.velocity[b] + ws.omega[b].cross(&r))
+        }
+    }
+}
+
+fn frame_rotation<S: Scalar>(frame: Frame, ws: &Workspace<S>) -> Matrix3<S> {
+    match frame {
+        Frame::World => Matrix3::identity(),
+        Frame::Body(b) => ws.rotation[b],
+    }
+}
+
+fn frame_omega<S: Scalar>(frame: Frame, ws: &Workspace<S>) -> Vector3<S> {
+    match frame {
+        Frame::World => Vector3::zeros(),
+        Frame::Body(b) => ws.omega[b],
+    }
+}
+
 /// The unit quaternion stored at `x[start..start + 4]` as (w, x, y, z), normalised.
-pub fn quaternion_at(x: &[f64], start: usize) -> UnitQuaternion<f64> {
-    UnitQuaternion::from_quaternion(Quaternion::new(
-        x[start],
-        x[start + 1],
-        x[start + 2],
-        x[start + 3],
-    ))
+pub fn quaternion_at<S: Scalar>(x: &[S], start: usize) -> UnitQuaternion<S> {
+    UnitQuaternion::from_quaternion(Quaternion::new(x[start], x[start + 1], x[start + 2], x[start + 3]))
 }
 
 /// Bushing law along one attach axis: force (or torque) on the child.
@@ -532,18 +552,22 @@ pub(crate) fn bushing_force(stiffness: f64, damping: f64, deflection: f64, rate:
 /// sensor readings already in `elements`. The external servo force input is added
 /// to the controller's actuator (to the first actuator when there is no controller).
 #[inline]
-pub(crate) fn servo_force(model: &Model, x: &[f64], inputs: &Inputs, elements: &mut ElementValues) {
-    elements.actuator_force.fill(0.0);
-    elements.reference = inputs.reference;
+pub(crate) fn servo_force<S: Scalar>(
+    model: &Model,
+    x: &[S],
+    inputs: &InputValues<S>,
+    elements: &mut ElementValues<S>,
+) {
+    elements.actuator_force.fill(S::zero());
     let servo_actuator = match &model.controller {
         Some(controller) => {
-            let error = elements.sensor_position[controller.sensor] - inputs.reference.position;
-            let error_rate =
-                elements.sensor_velocity[controller.sensor] - inputs.reference.velocity;
-            let integral = controller.integral_index.map_or(0.0, |i| x[i]);
+            let error = elements.sensor_position[controller.sensor] - inputs.reference_position;
+            let error_rate = elements.sensor_velocity[controller.sensor] - inputs.reference_velocity;
+            let integral = controller.integral_index.map_or(S::zero(), |i| x[i]);
             elements.tracking_error = error;
-            elements.actuator_force[controller.actuator] =
-                -(controller.k * error + controller.c * error_rate + controller.k_i * integral);
+            elements.actuator_force[controller.actuator] = -(S::constant(controller.k) * error
+                + S::constant(controller.c) * error_rate
+                + S::constant(controller.k_i) * integral);
             Some(controller.actuator)
         }
         None => (!model.actuators.is_empty()).then_some(0),
@@ -554,32 +578,28 @@ pub(crate) fn servo_force(model: &Model, x: &[f64], inputs: &Inputs, elements: &
 }
 
 /// The rotation vector (axis times angle) of a rotation matrix.
-fn rotation_log(r: &Matrix3<f64>) -> Vector3<f64> {
-    let skew = 0.5
-        * Vector3::new(
-            r[(2, 1)] - r[(1, 2)],
-            r[(0, 2)] - r[(2, 0)],
-            r[(1, 0)] - r[(0, 1)],
-        );
+fn rotation_log<S: Scalar>(r: &Matrix3<S>) -> Vector3<S> {
+    let half = S::constant(0.5);
+    let skew = Vector3::new(r[(2, 1)] - r[(1, 2)], r[(0, 2)] - r[(2, 0)], r[(1, 0)] - r[(0, 1)]) * half;
     let sin = skew.norm();
-    let cos = 0.5 * (r.trace() - 1.0);
-    if sin < 1e-6 {
+    let cos = (r.trace() - S::one()) * half;
+    if sin.value() < 1e-6 {
         // angle / sin(angle) = 1 + angle^2 / 6 + ...
-        return skew * (1.0 + sin * sin / 6.0);
+        return skew * (S::one() + sin * sin / S::constant(6.0));
     }
-    if cos > -0.99 {
+    if cos.value() > -0.99 {
         return skew * (sin.atan2(cos) / sin);
     }
     // Near half a turn the skew part loses the axis: fall back to the quaternion.
     Rotation3::from_matrix_unchecked(*r).scaled_axis()
 }
 
-fn apply_wrench(
-    ws: &mut Workspace,
+fn apply_wrench<S: Scalar>(
+    ws: &mut Workspace<S>,
     frame: Frame,
-    point: &Vector3<f64>,
-    force: &Vector3<f64>,
-    torque: &Vector3<f64>,
+    point: &Vector3<S>,
+    force: &Vector3<S>,
+    torque: &Vector3<S>,
 ) {
     if let Frame::Body(b) = frame {
         ws.force[b] += force;
@@ -587,7 +607,7 @@ fn apply_wrench(
     }
 }
 
-impl Workspace {
+impl Workspace<f64> {
     /// World velocity of a point (body frame coordinates) after [`Model::evaluate`].
     pub(crate) fn point_velocity(&self, body: usize, point: &Vector3<f64>) -> Vector3<f64> {
         self.velocity[body] + self.omega[body].cross(&(self.rotation[body] * point))
@@ -595,11 +615,12 @@ impl Workspace {
 }
 
 /// Joint-space mass matrix from body Jacobians: `sum m Jv^T Jv + Jw^T I Jw`.
-fn fill_mass_matrix(model: &Model, ws: &mut Workspace) {
-    ws.mass.fill(0.0);
+fn fill_mass_matrix<S: Scalar>(model: &Model, ws: &mut Workspace<S>) {
+    ws.mass.fill(S::zero());
     for (i, body) in model.bodies.iter().enumerate() {
-        let com = ws.origin[i] + ws.rotation[i] * body.com;
-        let inertia = ws.rotation[i] * body.inertia * ws.rotation[i].transpose();
+        let com = ws.origin[i] + ws.rotation[i] * cast3::<S>(&body.com);
+        let inertia = ws.rotation[i] * cast33::<S>(&body.inertia) * ws.rotation[i].transpose();
+        let mass = S::constant(body.mass);
         ws.jacobian.clear();
         for &dof in &body.chain {
             let s = ws.dof_axis[dof];
@@ -614,7 +635,7 @@ fn fill_mass_matrix(model: &Model, ws: &mut Workspace) {
             let inertia_wa = inertia * wa;
             for (b, &col) in body.chain.iter().enumerate().skip(a) {
                 let (vb, wb) = ws.jacobian[b];
-                let entry = body.mass * va.dot(&vb) + wb.dot(&inertia_wa);
+                let entry = mass * va.dot(&vb) + wb.dot(&inertia_wa);
                 ws.mass[(row, col)] += entry;
                 if b != a {
                     ws.mass[(col, row)] += entry;

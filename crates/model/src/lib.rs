@@ -12,11 +12,12 @@ pub mod lugre;
 pub mod model;
 pub mod reference;
 pub mod robot;
+pub mod scalar;
 pub mod scenario;
 mod translational;
 
 pub use assembly::{Loaded, assemble, load};
-pub use dynamics::{ElementValues, Workspace};
+pub use dynamics::{ElementValues, InputValues, Workspace};
 pub use error::LoadError;
 pub use lugre::{InvalidLugreParameter, LugreParams};
 pub use model::{
@@ -25,4 +26,5 @@ pub use model::{
 };
 pub use reference::{Reference, ReferenceSample};
 pub use robot::{FISTAGE_NS, RobotSpec};
+pub use scalar::{Dual64, Scalar};
 pub use scenario::{ControllerSettings, Override, Scenario, SolverSettings};

@@ -13,6 +13,8 @@
 //! `f_ss(v) = [f_c + (f_s - f_c) exp(-(v/v_s)^2)] sgn(v) + sigma2 v` (paper Eq. 30).
 
 use serde::{Deserialize, Serialize};
+
+use crate::scalar::{Scalar, kink_abs};
 use thiserror::Error;
 
 /// A LuGre parameter that violates its physical requirement.
@@ -144,11 +146,19 @@ impl LugreParams {
     /// Friction force on the contact (opposing positive `v`) and the bristle rate.
     #[inline]
     pub fn force_and_z_rate(&self, v: f64, z: f64) -> (f64, f64) {
-        let z_dot = self.z_rate(v, z);
-        (
-            self.sigma0 * z + self.sigma1 * z_dot + self.sigma2 * v,
-            z_dot,
-        )
+        self.force_and_z_rate_of(v, z)
+    }
+
+    /// [`Self::force_and_z_rate`] for any [`Scalar`] (dual numbers differentiate it).
+    #[inline]
+    pub fn force_and_z_rate_of<S: Scalar>(&self, v: S, z: S) -> (S, S) {
+        let r = v / S::constant(self.v_s);
+        let level = S::constant(self.f_c) + S::constant(self.f_s - self.f_c) * (-(r * r)).exp();
+        let z_dot = v - kink_abs(v) * S::constant(self.sigma0) / level * z;
+        let force = S::constant(self.sigma0) * z
+            + S::constant(self.sigma1) * z_dot
+            + S::constant(self.sigma2) * v;
+        (force, z_dot)
     }
 
     /// Steady-state friction at constant sliding velocity v (paper Eq. 30), N.

@@ -125,12 +125,13 @@ impl TranslationalMap {
             axpy(f, row, force);
         }
         let elements = &mut ws.elements;
+        elements.reference = inputs.reference;
         for k in 0..model.sensors.len() {
             let row = &self.sensor_rows[k * nv..(k + 1) * nv];
             elements.sensor_position[k] = self.sensor_offsets[k] + dot(row, q);
             elements.sensor_velocity[k] = dot(row, v);
         }
-        servo_force(model, x, inputs, elements);
+        servo_force(model, x, &inputs.values(), elements);
         for k in 0..model.actuators.len() {
             let row = &self.actuator_rows[k * nv..(k + 1) * nv];
             axpy(elements.actuator_force[k], row, force);

@@ -1,0 +1,132 @@
+//! `fistage bench`: measured speed and accuracy, printed as the Markdown tables
+//! that BENCHMARKS.md quotes. Each case times only the integration (no output
+//! signals, no files), takes the median of several repeats, and measures the
+//! error against a run at a much tighter tolerance.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context;
+use fistage_model::Loaded;
+use fistage_sim::{Engine, ScenarioExcitation, SimSettings, Trajectory, engine_by_name, initial_state};
+
+/// Arguments of `fistage bench`.
+#[derive(clap::Args)]
+pub struct BenchArgs {
+    /// Scenario to time (default: the paper's Fig. 5b stage with FI).
+    #[arg(long, default_value = "scenarios/paper/fig05b_fi.toml")]
+    pub scenario: PathBuf,
+    /// Relative tolerances to compare.
+    #[arg(long, value_delimiter = ',', default_values_t = vec![1e-6, 1e-8, 1e-10])]
+    pub rtol: Vec<f64>,
+    /// Tolerance of the reference run.
+    #[arg(long, default_value_t = 1e-13)]
+    pub reference_rtol: f64,
+    /// Repeats per case (the median is reported).
+    #[arg(long, default_value_t = 21)]
+    pub repeat: usize,
+    /// Signal whose error is reported.
+    #[arg(long, default_value = "encoder.position")]
+    pub signal: String,
+}
+
+/// CPU time of the calling thread, s.
+fn thread_cpu_time() -> f64 {
+    let mut spec = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: clock_gettime writes into the timespec we own; the clock id is a constant.
+    let status = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut spec) };
+    if status == 0 {
+        spec.tv_sec as f64 + spec.tv_nsec as f64 * 1e-9
+    } else {
+        f64::NAN
+    }
+}
+
+struct Timing {
+    wall_s: f64,
+    cpu_s: f64,
+    trajectory: Trajectory,
+}
+
+fn time_run(loaded: &Loaded, engine: &dyn Engine, rtol: f64, repeat: usize) -> anyhow::Result<Timing> {
+    let scenario = &loaded.scenario;
+    let x0 = initial_state(&loaded.model, scenario)?;
+    let excitation = ScenarioExcitation::from_scenario(scenario);
+    let settings = SimSettings {
+        rtol,
+        ..SimSettings::from_scenario(scenario)
+    };
+    let mut walls = Vec::with_capacity(repeat);
+    let mut cpus = Vec::with_capacity(repeat);
+    let mut last = None;
+    for _ in 0..repeat.max(1) {
+        let (wall, cpu) = (Instant::now(), thread_cpu_time());
+        let trajectory = engine.simulate(&loaded.model, &x0, &excitation, &settings, &mut |_| {})?;
+        cpus.push(thread_cpu_time() - cpu);
+        walls.push(wall.elapsed().as_secs_f64());
+        last = Some(trajectory);
+    }
+    Ok(Timing {
+        wall_s: median(&mut walls),
+        cpu_s: median(&mut cpus),
+        trajectory: last.context("no run")?,
+    })
+}
+
+fn median(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
+}
+
+/// Largest deviation of a signal between two trajectories on the same grid.
+fn max_deviation(loaded: &Loaded, a: &Trajectory, b: &Trajectory, signal: &str) -> anyhow::Result<(f64, f64)> {
+    let excitation = ScenarioExcitation::from_scenario(&loaded.scenario);
+    let (ta, tb) = (a.signals(&loaded.model, &excitation), b.signals(&loaded.model, &excitation));
+    let (xa, xb) = (
+        ta.column(signal).with_context(|| format!("no signal {signal}"))?,
+        tb.column(signal).with_context(|| format!("no signal {signal}"))?,
+    );
+    anyhow::ensure!(xa.len() == xb.len(), "trajectories have different grids");
+    let worst = xa.iter().zip(xb).map(|(p, q)| (p - q).abs()).fold(0.0, f64::max);
+    let size = xb.iter().map(|v| v.abs()).fold(0.0, f64::max);
+    Ok((worst, worst / size))
+}
+
+/// Runs the benchmark and prints Markdown.
+pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
+    let loaded = fistage_model::load(&args.scenario)?;
+    let engine = engine_by_name(&loaded.scenario.solver.engine)
+        .with_context(|| format!("unknown engine {}", loaded.scenario.solver.engine))?;
+    eprintln!("reference run at rtol {:e} ...", args.reference_rtol);
+    let reference = time_run(&loaded, engine.as_ref(), args.reference_rtol, 1)?;
+    let simulated = loaded.scenario.duration;
+    println!(
+        "`{}` ({} s simulated, engine {}, median of {} runs, error of `{}` against rtol {:e}, release build)\n",
+        args.scenario.display(),
+        simulated,
+        engine.name(),
+        args.repeat,
+        args.signal,
+        args.reference_rtol
+    );
+    println!("| rtol | wall ms | CPU ms | x real time | steps | rejected | RHS evals | max error (m) | relative error |");
+    println!("|---|---|---|---|---|---|---|---|---|");
+    for &rtol in &args.rtol {
+        let timing = time_run(&loaded, engine.as_ref(), rtol, args.repeat)?;
+        let (error, relative) = max_deviation(&loaded, &timing.trajectory, &reference.trajectory, &args.signal)?;
+        let counts = timing.trajectory.stats.counts;
+        println!(
+            "| {rtol:.0e} | {:.2} | {:.2} | {:.0} | {} | {} | {} | {error:.2e} | {relative:.2e} |",
+            timing.wall_s * 1e3,
+            timing.cpu_s * 1e3,
+            simulated / timing.cpu_s,
+            counts.steps,
+            counts.rejected,
+            counts.rhs_evaluations,
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,102 @@
+//! `fistage check SCENARIO`: load and validate a scenario and its robot without
+//! simulating, and print what was assembled: bodies, joints, elements, the
+//! state layout and the output signals.
+
+use std::path::PathBuf;
+
+use fistage_model::{Frame, JointMotion, Model};
+
+/// Arguments of `fistage check`.
+#[derive(clap::Args)]
+pub struct CheckArgs {
+    /// Scenario file (TOML).
+    pub scenario: PathBuf,
+}
+
+/// Runs the command.
+pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
+    let loaded = fistage_model::load(&args.scenario)?;
+    let model = &loaded.model;
+    println!("{}: ok", args.scenario.display());
+    println!("robot {} ({})", model.name, loaded.scenario.robot.display());
+    print_bodies(model);
+    print_elements(model);
+    println!("states ({}):", model.n_states());
+    for ((name, kind), nominal) in model
+        .layout
+        .names
+        .iter()
+        .zip(&model.layout.kinds)
+        .zip(&model.layout.nominal)
+    {
+        println!("  {name:<32} [{}]  nominal {nominal:.1e}", kind.unit());
+    }
+    println!("signals ({}):", model.signals.len());
+    for signal in &model.signals {
+        println!("  {} [{}]", signal.name, signal.unit);
+    }
+    Ok(())
+}
+
+fn frame_name(model: &Model, frame: Frame) -> String {
+    match frame {
+        Frame::World => "world".into(),
+        Frame::Body(b) => model.bodies[b].name.clone(),
+    }
+}
+
+fn print_bodies(model: &Model) {
+    println!("bodies ({}):", model.bodies.len());
+    for body in &model.bodies {
+        let parent = body
+            .parent
+            .map_or("world".to_string(), |p| model.bodies[p].name.clone());
+        let kind = match body.joint.motion {
+            JointMotion::Prismatic { axis } => format!("prismatic [{:.3} {:.3} {:.3}]", axis.x, axis.y, axis.z),
+            JointMotion::Revolute { axis } => format!("revolute [{:.3} {:.3} {:.3}]", axis.x, axis.y, axis.z),
+            JointMotion::Floating => "floating".into(),
+        };
+        println!(
+            "  {} on {} ({kind}) to {parent}: mass {:.6} kg, com [{:.4} {:.4} {:.4}] m, links {}",
+            body.name,
+            body.joint.name,
+            body.mass,
+            body.com.x,
+            body.com.y,
+            body.com.z,
+            body.links.join(", ")
+        );
+    }
+}
+
+fn print_elements(model: &Model) {
+    for isolator in &model.isolators {
+        println!(
+            "  isolator {}: {} -> {}, stiffness {:?}, damping {:?}",
+            isolator.name,
+            frame_name(model, isolator.parent),
+            frame_name(model, isolator.child),
+            isolator.stiffness,
+            isolator.damping
+        );
+    }
+    for friction in &model.frictions {
+        let p = &friction.lugre;
+        println!(
+            "  friction {} on {}: sigma0 {} sigma1 {} sigma2 {} f_c {} f_s {} v_s {}",
+            friction.name, model.bodies[friction.body].name, p.sigma0, p.sigma1, p.sigma2, p.f_c, p.f_s, p.v_s
+        );
+    }
+    for actuator in &model.actuators {
+        println!("  actuator {} on {}", actuator.name, model.bodies[actuator.body].name);
+    }
+    for sensor in &model.sensors {
+        println!("  sensor {} on {}", sensor.name, model.bodies[sensor.body].name);
+    }
+    if let Some(c) = &model.controller {
+        println!(
+            "  controller: {} -> {}, k {} c {} k_i {}",
+            model.sensors[c.sensor].name, model.actuators[c.actuator].name, c.k, c.c, c.k_i
+        );
+    }
+}

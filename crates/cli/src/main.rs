@@ -1,0 +1,39 @@
+//! The `fistage` command-line program: a thin face over the library crates.
+
+mod bench;
+mod check;
+mod figures;
+mod identify;
+mod progress;
+mod run;
+
+use clap::{Parser, Subcommand};
+
+#[derive(Parser)]
+#[command(name = "fistage", version, about = "Precision motion stages with friction isolators")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Simulate a scenario; write trajectory.csv, summary.json and plots.
+    Run(run::RunArgs),
+    /// Load and validate a scenario and its robot; print the assembled model.
+    Check(check::CheckArgs),
+    /// Measure engine speed and accuracy (Markdown tables for BENCHMARKS.md).
+    Bench(bench::BenchArgs),
+    /// Identify LuGre parameters from measured stage data.
+    Identify(identify::IdentifyArgs),
+}
+
+fn main() -> anyhow::Result<()> {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Run(args) => run::run(&args),
+        Command::Identify(args) => identify::run(&args),
+        Command::Bench(args) => bench::run(&args),
+        Command::Check(args) => check::run(&args),
+    }
+}

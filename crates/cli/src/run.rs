@@ -1,0 +1,172 @@
+//! `fistage run SCENARIO [--out DIR]`: simulate a scenario, write the trajectory
+//! CSV, `summary.json` and plots, and print the steady-state summary.
+
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use fistage_sim::{RunOutput, SignalSummary};
+
+use crate::{figures, progress};
+
+/// Arguments of `fistage run`.
+#[derive(clap::Args)]
+pub struct RunArgs {
+    /// Scenario file (TOML).
+    pub scenario: PathBuf,
+    /// Output folder (default: out/<scenario name>).
+    #[arg(long, short)]
+    pub out: Option<PathBuf>,
+    /// Override the scenario's relative tolerance.
+    #[arg(long)]
+    pub rtol: Option<f64>,
+    /// Skip the plots.
+    #[arg(long)]
+    pub no_plots: bool,
+}
+
+/// Runs the command.
+pub fn run(args: &RunArgs) -> anyhow::Result<()> {
+    let mut loaded = fistage_model::load(&args.scenario)?;
+    if let Some(rtol) = args.rtol {
+        anyhow::ensure!(rtol > 0.0 && rtol < 0.1, "--rtol must be in (0, 0.1), got {rtol}");
+        loaded.scenario.solver.rtol = rtol;
+    }
+    let out_dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| default_out_dir(&args.scenario));
+    let bar = progress::bar(&format!("run {}", args.scenario.display()));
+    let output = fistage_sim::run_scenario(&loaded, &mut |f| progress::set_fraction(&bar, f))?;
+    bar.finish_and_clear();
+    std::fs::create_dir_all(&out_dir)
+        .with_context(|| format!("cannot create output folder {}", out_dir.display()))?;
+    write_csv(&output, &out_dir.join("trajectory.csv"))?;
+    write_summary(&loaded, &output, &out_dir.join("summary.json"))?;
+    let mut written = vec!["trajectory.csv".to_string(), "summary.json".to_string()];
+    if !args.no_plots {
+        written.extend(figures::run_figures(&loaded, &output, &out_dir)?);
+    }
+    print_summary(&loaded, &output);
+    println!("wrote {} in {}", written.join(", "), out_dir.display());
+    Ok(())
+}
+
+/// `out/<file stem>` next to the working directory.
+pub fn default_out_dir(scenario: &Path) -> PathBuf {
+    let stem = scenario
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "run".into());
+    PathBuf::from("out").join(stem)
+}
+
+fn write_csv(output: &RunOutput, path: &Path) -> anyhow::Result<()> {
+    let file = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+    let mut writer = BufWriter::new(file);
+    output
+        .signals
+        .write_csv(&mut writer)
+        .with_context(|| format!("cannot write {}", path.display()))
+}
+
+#[derive(serde::Serialize)]
+struct SummaryFile<'a> {
+    scenario: String,
+    title: &'a str,
+    robot: String,
+    duration_s: f64,
+    window_s: [f64; 2],
+    rtol: f64,
+    solver: &'a fistage_sim::SolverStats,
+    signals: serde_json::Map<String, serde_json::Value>,
+}
+
+fn write_summary(
+    loaded: &fistage_model::Loaded,
+    output: &RunOutput,
+    path: &Path,
+) -> anyhow::Result<()> {
+    let scenario = &loaded.scenario;
+    let mut signals = serde_json::Map::new();
+    for s in &output.summary {
+        signals.insert(s.name.clone(), serde_json::to_value(SignalEntry::from(s))?);
+    }
+    let summary = SummaryFile {
+        scenario: scenario.file.display().to_string(),
+        title: &scenario.title,
+        robot: scenario.robot.display().to_string(),
+        duration_s: scenario.duration,
+        window_s: scenario.window,
+        rtol: scenario.solver.rtol,
+        solver: &output.trajectory.stats,
+        signals,
+    };
+    let text = serde_json::to_string_pretty(&summary)?;
+    std::fs::write(path, text + "\n").with_context(|| format!("cannot write {}", path.display()))
+}
+
+#[derive(serde::Serialize)]
+struct SignalEntry<'a> {
+    unit: &'a str,
+    mean: f64,
+    peak_to_peak: f64,
+    rms: f64,
+    min: f64,
+    max: f64,
+    std: f64,
+}
+
+impl<'a> From<&'a SignalSummary> for SignalEntry<'a> {
+    fn from(s: &'a SignalSummary) -> Self {
+        Self {
+            unit: &s.unit,
+            mean: s.stats.mean,
+            peak_to_peak: s.stats.peak_to_peak,
+            rms: s.stats.rms,
+            min: s.stats.min,
+            max: s.stats.max,
+            std: s.stats.std,
+        }
+    }
+}
+
+fn print_summary(loaded: &fistage_model::Loaded, output: &RunOutput) {
+    let scenario = &loaded.scenario;
+    if !scenario.title.is_empty() {
+        println!("{}", scenario.title);
+    }
+    println!(
+        "steady-state window {:.3} s to {:.3} s",
+        scenario.window[0], scenario.window[1]
+    );
+    let width = output
+        .summary
+        .iter()
+        .map(|s| s.name.len() + s.unit.len() + 3)
+        .max()
+        .unwrap_or(10)
+        .max(10);
+    println!(
+        "{:<width$} {:>13} {:>13} {:>13} {:>13} {:>13}",
+        "signal", "mean", "peak-to-peak", "rms", "min", "max"
+    );
+    for s in &output.summary {
+        let label = format!("{} [{}]", s.name, s.unit);
+        println!(
+            "{label:<width$} {:>13.5e} {:>13.5e} {:>13.5e} {:>13.5e} {:>13.5e}",
+            s.stats.mean, s.stats.peak_to_peak, s.stats.rms, s.stats.min, s.stats.max
+        );
+    }
+    let stats = &output.trajectory.stats;
+    println!(
+        "solver {} rtol {:e}: {} steps, {} rejected, {} rhs evaluations, {:.3} s wall",
+        stats.engine,
+        scenario.solver.rtol,
+        stats.counts.steps,
+        stats.counts.rejected,
+        stats.counts.rhs_evaluations,
+        stats.wall_time_s
+    );
+}

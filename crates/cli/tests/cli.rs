@@ -1,0 +1,89 @@
+//! The `fistage` program end to end: `run` writes its files, bad input fails
+//! with a message naming the file and key and writes nothing, `check` prints
+//! the assembled model.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn fistage() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_fistage"))
+}
+
+fn repository() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("fistage-cli-{name}-{}", std::process::id()));
+    std::fs::remove_dir_all(&dir).ok();
+    dir
+}
+
+#[test]
+fn run_writes_trajectory_summary_and_plots() {
+    let out = scratch("run");
+    let status = fistage()
+        .arg("run")
+        .arg(repository().join("scenarios/paper/fig05b_rigid.toml"))
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("fistage runs");
+    assert!(status.status.success(), "{}", String::from_utf8_lossy(&status.stderr));
+    let stdout = String::from_utf8_lossy(&status.stdout);
+    assert!(stdout.contains("encoder.position [m]"), "{stdout}");
+    for file in ["trajectory.csv", "summary.json", "response.svg", "response.png", "phase.svg", "phase.png"] {
+        assert!(out.join(file).is_file(), "missing {file}");
+    }
+    let csv = std::fs::read_to_string(out.join("trajectory.csv")).expect("csv");
+    let header = csv.lines().next().expect("header");
+    assert!(header.starts_with("time [s],encoder.position [m],encoder.velocity [m/s]"), "{header}");
+    assert_eq!(csv.lines().count(), 1 + 5001, "5 s at 1 kHz plus the header");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("json")).expect("valid json");
+    let mean = summary["signals"]["encoder.position"]["mean"].as_f64().expect("mean");
+    // The rigid stage settles where the servo holds the steady friction: x = -f_ss(-20 mm/s) / k.
+    let lugre = fistage_model::LugreParams::paper_table1();
+    let expected = -lugre.steady_state_force(-0.02) / 6e4;
+    assert!((mean - expected).abs() < 1e-9, "{mean} vs {expected}");
+    assert!(summary["solver"]["steps"].as_u64().expect("steps") > 100);
+    std::fs::remove_dir_all(&out).ok();
+}
+
+#[test]
+fn bad_scenario_names_the_key_and_writes_nothing() {
+    let dir = scratch("bad");
+    std::fs::create_dir_all(&dir).expect("dir");
+    let scenario = dir.join("bad.toml");
+    let robot = repository().join("robots/stage_1dof_fi.urdf");
+    std::fs::write(
+        &scenario,
+        format!(
+            "robot = {:?}\nduration = 1.0\n[overrides.bearing_friction]\nsigma0 = -3\n",
+            robot.display().to_string()
+        ),
+    )
+    .expect("write");
+    let out = dir.join("out");
+    let result = fistage().arg("run").arg(&scenario).arg("--out").arg(&out).output().expect("runs");
+    assert!(!result.status.success());
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(stderr.contains("bad.toml") && stderr.contains("overrides.bearing_friction.sigma0"), "{stderr}");
+    assert!(stderr.contains("sigma0 must be > 0, got -3"), "{stderr}");
+    assert!(!out.exists(), "a failed run must not create its output folder");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn check_prints_the_assembled_model() {
+    let result = fistage()
+        .arg("check")
+        .arg(repository().join("scenarios/paper/fig05b_rigid.toml"))
+        .output()
+        .expect("runs");
+    assert!(result.status.success());
+    let stdout = String::from_utf8_lossy(&result.stdout);
+    assert!(stdout.contains("mass 1.500000 kg"), "{stdout}");
+    assert!(stdout.contains("links table, bearing"), "{stdout}");
+    assert!(stdout.contains("bearing_friction.z"), "{stdout}");
+}

@@ -1,0 +1,1 @@
+//! fistage-ident: LuGre identification from f_ss(v) curves and FRFs (in progress).

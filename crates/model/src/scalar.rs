@@ -1,0 +1,45 @@
+//! The scalar types the physics is written over: `f64` for simulation and
+//! forward-mode dual numbers ([`Dual64`]) for exact Jacobians. One generic
+//! implementation serves both, so the linearisation differentiates exactly the
+//! code that is simulated.
+
+use nalgebra::RealField;
+pub use num_dual::Dual64;
+
+/// A real scalar: `f64` or a dual number carrying one directional derivative.
+pub trait Scalar: RealField + Copy {
+    /// The real part.
+    fn value(self) -> f64;
+    /// A constant (zero derivative).
+    fn constant(value: f64) -> Self;
+}
+
+impl Scalar for f64 {
+    #[inline]
+    fn value(self) -> f64 {
+        self
+    }
+    #[inline]
+    fn constant(value: f64) -> Self {
+        value
+    }
+}
+
+impl Scalar for Dual64 {
+    #[inline]
+    fn value(self) -> f64 {
+        self.re
+    }
+    #[inline]
+    fn constant(value: f64) -> Self {
+        Dual64::from_re(value)
+    }
+}
+
+/// |v|, with derivative 0 at v = 0 (the middle of its subdifferential). The
+/// LuGre bristle law has this kink at zero sliding velocity; linearising a
+/// stuck contact uses the zero slope, as the paper's sticking Jacobians do.
+#[inline]
+pub fn kink_abs<S: Scalar>(v: S) -> S {
+    if v.value() == 0.0 { S::zero() } else { v.abs() }
+}

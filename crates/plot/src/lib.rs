@@ -1,0 +1,50 @@
+//! fistage-plot: publication-quality SVG and PNG figures of fistage results (time responses,
+//! phase portraits, heatmaps, Bode plots), with no system libraries needed.
+//!
+//! Every writer takes the output path; `.svg` or `.png` (any case) selects the format. Text
+//! uses the embedded DejaVu Sans font. Non-finite values are skipped (lines break there),
+//! panels without drawable data say "no data", and very long series are reduced per pixel
+//! column (keeping each column's minimum and maximum) so files stay small.
+//!
+//! ```no_run
+//! use std::path::Path;
+//! use fistage_plot::{Figure, Panel, Series, write_figure};
+//!
+//! let t: Vec<f64> = (0..1000).map(|i| i as f64 * 1e-3).collect();
+//! let x: Vec<f64> = t.iter().map(|t| (10.0 * t).sin()).collect();
+//! let figure = Figure::new(
+//!     "Step response",
+//!     "time [s]",
+//!     vec![Panel::new("table position [m]", vec![Series::line("table", t, x)])],
+//! );
+//! write_figure(&figure, Path::new("step.svg"))?;
+//! # Ok::<(), fistage_plot::PlotError>(())
+//! ```
+
+mod axis;
+mod bode;
+mod cells;
+mod chart;
+mod colour_key;
+mod coord;
+mod coverage;
+mod decimate;
+mod error;
+mod figure;
+mod font;
+mod geometry;
+mod heatmap;
+mod layer;
+mod legend;
+mod output;
+mod palette;
+mod plot;
+mod series;
+mod xy;
+
+pub use bode::{BodeSeries, write_bode};
+pub use error::PlotError;
+pub use figure::{Figure, Panel, write_figure};
+pub use heatmap::{ColourScale, Heatmap, write_heatmap};
+pub use series::{Series, SeriesStyle};
+pub use xy::{XyPlot, write_xy};
