@@ -8,7 +8,9 @@ use std::time::Instant;
 
 use anyhow::Context;
 use fistage_model::Loaded;
-use fistage_sim::{Engine, ScenarioExcitation, SimSettings, Trajectory, engine_by_name, initial_state};
+use fistage_sim::{
+    Engine, ScenarioExcitation, SimSettings, Trajectory, engine_by_name, initial_state,
+};
 
 /// Arguments of `fistage bench`.
 #[derive(clap::Args)]
@@ -51,7 +53,12 @@ struct Timing {
     trajectory: Trajectory,
 }
 
-fn time_run(loaded: &Loaded, engine: &dyn Engine, rtol: f64, repeat: usize) -> anyhow::Result<Timing> {
+fn time_run(
+    loaded: &Loaded,
+    engine: &dyn Engine,
+    rtol: f64,
+    repeat: usize,
+) -> anyhow::Result<Timing> {
     let scenario = &loaded.scenario;
     let x0 = initial_state(&loaded.model, scenario)?;
     let excitation = ScenarioExcitation::from_scenario(scenario);
@@ -64,7 +71,8 @@ fn time_run(loaded: &Loaded, engine: &dyn Engine, rtol: f64, repeat: usize) -> a
     let mut last = None;
     for _ in 0..repeat.max(1) {
         let (wall, cpu) = (Instant::now(), thread_cpu_time());
-        let trajectory = engine.simulate(&loaded.model, &x0, &excitation, &settings, &mut |_| {})?;
+        let trajectory =
+            engine.simulate(&loaded.model, &x0, &excitation, &settings, &mut |_| {})?;
         cpus.push(thread_cpu_time() - cpu);
         walls.push(wall.elapsed().as_secs_f64());
         last = Some(trajectory);
@@ -82,15 +90,29 @@ fn median(values: &mut [f64]) -> f64 {
 }
 
 /// Largest deviation of a signal between two trajectories on the same grid.
-fn max_deviation(loaded: &Loaded, a: &Trajectory, b: &Trajectory, signal: &str) -> anyhow::Result<(f64, f64)> {
+fn max_deviation(
+    loaded: &Loaded,
+    a: &Trajectory,
+    b: &Trajectory,
+    signal: &str,
+) -> anyhow::Result<(f64, f64)> {
     let excitation = ScenarioExcitation::from_scenario(&loaded.scenario);
-    let (ta, tb) = (a.signals(&loaded.model, &excitation), b.signals(&loaded.model, &excitation));
+    let (ta, tb) = (
+        a.signals(&loaded.model, &excitation),
+        b.signals(&loaded.model, &excitation),
+    );
     let (xa, xb) = (
-        ta.column(signal).with_context(|| format!("no signal {signal}"))?,
-        tb.column(signal).with_context(|| format!("no signal {signal}"))?,
+        ta.column(signal)
+            .with_context(|| format!("no signal {signal}"))?,
+        tb.column(signal)
+            .with_context(|| format!("no signal {signal}"))?,
     );
     anyhow::ensure!(xa.len() == xb.len(), "trajectories have different grids");
-    let worst = xa.iter().zip(xb).map(|(p, q)| (p - q).abs()).fold(0.0, f64::max);
+    let worst = xa
+        .iter()
+        .zip(xb)
+        .map(|(p, q)| (p - q).abs())
+        .fold(0.0, f64::max);
     let size = xb.iter().map(|v| v.abs()).fold(0.0, f64::max);
     Ok((worst, worst / size))
 }
@@ -112,11 +134,18 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         args.signal,
         args.reference_rtol
     );
-    println!("| rtol | wall ms | CPU ms | x real time | steps | rejected | RHS evals | max error (m) | relative error |");
+    println!(
+        "| rtol | wall ms | CPU ms | x real time | steps | rejected | RHS evals | max error (m) | relative error |"
+    );
     println!("|---|---|---|---|---|---|---|---|---|");
     for &rtol in &args.rtol {
         let timing = time_run(&loaded, engine.as_ref(), rtol, args.repeat)?;
-        let (error, relative) = max_deviation(&loaded, &timing.trajectory, &reference.trajectory, &args.signal)?;
+        let (error, relative) = max_deviation(
+            &loaded,
+            &timing.trajectory,
+            &reference.trajectory,
+            &args.signal,
+        )?;
         let counts = timing.trajectory.stats.counts;
         println!(
             "| {rtol:.0e} | {:.2} | {:.2} | {:.0} | {} | {} | {} | {error:.2e} | {relative:.2e} |",

@@ -52,8 +52,12 @@ fn print_bodies(model: &Model) {
             .parent
             .map_or("world".to_string(), |p| model.bodies[p].name.clone());
         let kind = match body.joint.motion {
-            JointMotion::Prismatic { axis } => format!("prismatic [{:.3} {:.3} {:.3}]", axis.x, axis.y, axis.z),
-            JointMotion::Revolute { axis } => format!("revolute [{:.3} {:.3} {:.3}]", axis.x, axis.y, axis.z),
+            JointMotion::Prismatic { axis } => {
+                format!("prismatic [{:.3} {:.3} {:.3}]", axis.x, axis.y, axis.z)
+            }
+            JointMotion::Revolute { axis } => {
+                format!("revolute [{:.3} {:.3} {:.3}]", axis.x, axis.y, axis.z)
+            }
             JointMotion::Floating => "floating".into(),
         };
         println!(
@@ -84,14 +88,27 @@ fn print_elements(model: &Model) {
         let p = &friction.lugre;
         println!(
             "  friction {} on {}: sigma0 {} sigma1 {} sigma2 {} f_c {} f_s {} v_s {}",
-            friction.name, model.bodies[friction.body].name, p.sigma0, p.sigma1, p.sigma2, p.f_c, p.f_s, p.v_s
+            friction.name,
+            model.bodies[friction.body].name,
+            p.sigma0,
+            p.sigma1,
+            p.sigma2,
+            p.f_c,
+            p.f_s,
+            p.v_s
         );
     }
     for actuator in &model.actuators {
-        println!("  actuator {} on {}", actuator.name, model.bodies[actuator.body].name);
+        println!(
+            "  actuator {} on {}",
+            actuator.name, model.bodies[actuator.body].name
+        );
     }
     for sensor in &model.sensors {
-        println!("  sensor {} on {}", sensor.name, model.bodies[sensor.body].name);
+        println!(
+            "  sensor {} on {}",
+            sensor.name, model.bodies[sensor.body].name
+        );
     }
     if let Some(c) = &model.controller {
         println!(

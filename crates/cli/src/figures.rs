@@ -22,11 +22,20 @@ fn length_unit(values: &[&[f64]]) -> LengthUnit {
         .filter(|v| v.is_finite())
         .fold(0.0_f64, |m, v| m.max(v.abs()));
     if largest >= 1e-2 {
-        LengthUnit { name: "mm", scale: 1e3 }
+        LengthUnit {
+            name: "mm",
+            scale: 1e3,
+        }
     } else if largest >= 1e-5 {
-        LengthUnit { name: "µm", scale: 1e6 }
+        LengthUnit {
+            name: "µm",
+            scale: 1e6,
+        }
     } else {
-        LengthUnit { name: "nm", scale: 1e9 }
+        LengthUnit {
+            name: "nm",
+            scale: 1e9,
+        }
     }
 }
 
@@ -82,7 +91,10 @@ fn response_figure(loaded: &Loaded, table: &SignalTable) -> Figure {
             let name = &body.joint.name;
             match body.joint.motion {
                 JointMotion::Prismatic { .. } => vec![format!("{name}.q")],
-                JointMotion::Floating => ["x", "y", "z"].iter().map(|a| format!("{name}.{a}")).collect(),
+                JointMotion::Floating => ["x", "y", "z"]
+                    .iter()
+                    .map(|a| format!("{name}.{a}"))
+                    .collect(),
                 JointMotion::Revolute { .. } => Vec::new(),
             }
         })
@@ -94,14 +106,34 @@ fn response_figure(loaded: &Loaded, table: &SignalTable) -> Figure {
     let panels = [
         length_panel("sensor", table, &sensor_signals),
         length_panel("joint position", table, &joints),
-        force_panel("friction force", table, &signals_with(table, ".force", "N")
-            .into_iter()
-            .filter(|(name, _)| loaded.model.frictions.iter().any(|f| name.starts_with(&format!("{}.", f.name))))
-            .collect::<Vec<_>>()),
-        force_panel("actuator force", table, &signals_with(table, ".force", "N")
-            .into_iter()
-            .filter(|(name, _)| loaded.model.actuators.iter().any(|a| name.starts_with(&format!("{}.", a.name))))
-            .collect::<Vec<_>>()),
+        force_panel(
+            "friction force",
+            table,
+            &signals_with(table, ".force", "N")
+                .into_iter()
+                .filter(|(name, _)| {
+                    loaded
+                        .model
+                        .frictions
+                        .iter()
+                        .any(|f| name.starts_with(&format!("{}.", f.name)))
+                })
+                .collect::<Vec<_>>(),
+        ),
+        force_panel(
+            "actuator force",
+            table,
+            &signals_with(table, ".force", "N")
+                .into_iter()
+                .filter(|(name, _)| {
+                    loaded
+                        .model
+                        .actuators
+                        .iter()
+                        .any(|a| name.starts_with(&format!("{}.", a.name)))
+                })
+                .collect::<Vec<_>>(),
+        ),
     ];
     let title = if loaded.scenario.title.is_empty() {
         loaded.scenario.file.display().to_string()
@@ -135,24 +167,34 @@ fn phase_portrait(loaded: &Loaded, table: &SignalTable) -> Option<XyPlot> {
         format!("{}.velocity [{}/s]", sensor.name, velocity_unit.name),
         vec![
             Series::line("whole run", x, v),
-            Series::line(format!("steady state ({} s to {} s)", window[0], window[1]), steady_x, steady_v),
+            Series::line(
+                format!("steady state ({} s to {} s)", window[0], window[1]),
+                steady_x,
+                steady_v,
+            ),
         ],
     ))
 }
 
 /// Writes the run's figures into `out_dir`; returns their file names.
-pub fn run_figures(loaded: &Loaded, output: &RunOutput, out_dir: &Path) -> anyhow::Result<Vec<String>> {
+pub fn run_figures(
+    loaded: &Loaded,
+    output: &RunOutput,
+    out_dir: &Path,
+) -> anyhow::Result<Vec<String>> {
     let mut written = Vec::new();
     let response = response_figure(loaded, &output.signals);
     for extension in ["svg", "png"] {
         let name = format!("response.{extension}");
-        write_figure(&response, &out_dir.join(&name)).with_context(|| format!("cannot draw {name}"))?;
+        write_figure(&response, &out_dir.join(&name))
+            .with_context(|| format!("cannot draw {name}"))?;
         written.push(name);
     }
     if let Some(portrait) = phase_portrait(loaded, &output.signals) {
         for extension in ["svg", "png"] {
             let name = format!("phase.{extension}");
-            write_xy(&portrait, &out_dir.join(&name)).with_context(|| format!("cannot draw {name}"))?;
+            write_xy(&portrait, &out_dir.join(&name))
+                .with_context(|| format!("cannot draw {name}"))?;
             written.push(name);
         }
     }

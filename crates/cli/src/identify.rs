@@ -3,26 +3,42 @@
 //! ```text
 //! fistage identify stribeck DATA.csv [--robust] [--asymmetric] [--json] [--out DIR]
 //! fistage identify frf DATA.csv [--mass M | --fit-mass] [--sigma2 S] [--json] [--out DIR]
+//! fistage identify simulate-stribeck ROBOT_OR_SCENARIO --out DATA.csv [--points N] [--exact]
+//! fistage identify simulate-frf ROBOT_OR_SCENARIO --out DATA.csv [--amplitude N] [--exact]
 //! ```
 //!
 //! Prints a table (or the JSON report with `--json`); with `--out DIR` also writes
 //! `fit.json`, `override.toml` (a `[overrides.<element>]` block a scenario can
-//! include) and `data_vs_fit.csv` / `fit_curve.csv` for plotting. Nothing is
-//! written unless the fit succeeds.
+//! include), `data_vs_fit.csv` / `fit_curve.csv`, and the plot of data against
+//! fit as `fit.svg` and `fit.png`: f_ss against v (measured points as markers,
+//! the points a fit flags as outliers as markers of their own, the fitted curve
+//! as a line, and with `--asymmetric` the curve of each branch), or the Bode
+//! plot of the FRF (magnitude, and phase when the data have it; measured points
+//! as markers, the fitted response as a line). Nothing is written unless the fit
+//! succeeds.
+//!
+//! The `simulate-*` commands make such data files from fistage's own simulation
+//! of a stage (see `fistage_ident::lab`): f_ss(v) from constant-velocity servo
+//! runs, the FRF from a stepped sine on the open-loop stage, with the sensor
+//! errors of a lab unless `--exact`; they print the stage's true parameters.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand, ValueEnum};
+use fistage_ident::lab::{FrfLab, LabStage, StribeckLab, log_spaced};
 use fistage_ident::report::{
     DEFAULT_ELEMENT, frf_curve_csv, frf_data_vs_fit_csv, stribeck_curve_csv,
     stribeck_data_vs_fit_csv,
 };
+use fistage_ident::synth::{FrfCsvLayout, frf_csv, stribeck_csv};
 use fistage_ident::{
-    FrfOptions, FrfReport, Loss, MassOption, Quantity, Sigma2Input, StribeckOptions,
-    StribeckReport, Unit, UnitOverrides, fit_frf, fit_stribeck, fit_stribeck_asymmetric,
-    frf_override, read_frf_csv, read_stribeck_csv, stribeck_override,
+    AsymmetricFit, FrfData, FrfFit, FrfOptions, FrfReport, Loss, MassOption, Quantity, Sigma2Input,
+    StribeckData, StribeckFit, StribeckOptions, StribeckReport, Unit, UnitOverrides, fit_frf,
+    fit_stribeck, fit_stribeck_asymmetric, frf_override, read_frf_csv, read_stribeck_csv,
+    stribeck_override,
 };
+use fistage_plot::{BodeSeries, Series, SeriesStyle, XyPlot, write_bode, write_xy};
 
 /// Arguments of `fistage identify`.
 #[derive(Args)]
@@ -37,6 +53,64 @@ enum IdentifyCommand {
     Stribeck(StribeckArgs),
     /// Fit sigma0 and sigma1 + sigma2 (and the mass) to the pre-motion FRF.
     Frf(FrfArgs),
+    /// Measure f_ss(v) on the simulated stage (servoed constant-velocity runs)
+    /// and write it as a lab CSV (velocity_mm_per_s, force_N).
+    SimulateStribeck(SimulateStribeckArgs),
+    /// Measure the pre-motion FRF on the simulated open-loop stage (stepped
+    /// sine) and write it as a lab CSV (freq_Hz, mag_dB, phase_deg).
+    SimulateFrf(SimulateFrfArgs),
+}
+
+/// Arguments shared by the simulated measurements.
+#[derive(Args)]
+struct SimulateArgs {
+    /// The stage: a robot file (.urdf) or a scenario (.toml: its robot and
+    /// overrides, and its servo's sensor and actuator; its gains, reference
+    /// and platform are not used).
+    stage: PathBuf,
+    /// The CSV file to write.
+    #[arg(long, value_name = "FILE")]
+    out: PathBuf,
+    /// Seed of the sensor errors.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// No sensor errors (noise, scatter, quantisation).
+    #[arg(long)]
+    exact: bool,
+}
+
+#[derive(Args)]
+struct SimulateStribeckArgs {
+    #[command(flatten)]
+    common: SimulateArgs,
+    /// Speeds per direction, log-spaced.
+    #[arg(long, default_value_t = 20)]
+    points: usize,
+    /// Lowest speed, m/s.
+    #[arg(long, value_name = "M_PER_S", default_value_t = 5e-4)]
+    v_min: f64,
+    /// Highest speed, m/s.
+    #[arg(long, value_name = "M_PER_S", default_value_t = 0.4)]
+    v_max: f64,
+}
+
+#[derive(Args)]
+struct SimulateFrfArgs {
+    #[command(flatten)]
+    common: SimulateArgs,
+    /// Frequencies, log-spaced.
+    #[arg(long, default_value_t = 30)]
+    points: usize,
+    /// Lowest frequency, Hz.
+    #[arg(long, value_name = "HZ", default_value_t = 10.0)]
+    f_min: f64,
+    /// Highest frequency, Hz.
+    #[arg(long, value_name = "HZ", default_value_t = 1000.0)]
+    f_max: f64,
+    /// Force amplitude, N (larger amplitudes bias the damping upwards: the
+    /// contact is then not the linear spring-damper of the FRF model).
+    #[arg(long, value_name = "N", default_value_t = 0.01)]
+    amplitude: f64,
 }
 
 /// Output options shared by both fits.
@@ -45,7 +119,8 @@ struct OutputArgs {
     /// Print the JSON report instead of the table.
     #[arg(long)]
     json: bool,
-    /// Write fit.json, override.toml, data_vs_fit.csv and fit_curve.csv into DIR.
+    /// Write fit.json, override.toml, data_vs_fit.csv, fit_curve.csv and the
+    /// data-vs-fit plot fit.svg / fit.png into DIR.
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
     /// Friction element that override.toml applies to.
@@ -136,7 +211,116 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
     match &args.fit {
         IdentifyCommand::Stribeck(a) => run_stribeck(a),
         IdentifyCommand::Frf(a) => run_frf(a),
+        IdentifyCommand::SimulateStribeck(a) => simulate_stribeck(a),
+        IdentifyCommand::SimulateFrf(a) => simulate_frf(a),
     }
+}
+
+/// `lo < hi`, both positive and finite, at least two points.
+fn check_range(name: &str, lo: f64, hi: f64, points: usize) -> Result<()> {
+    if !(lo > 0.0 && lo.is_finite() && hi.is_finite() && lo < hi) {
+        bail!("--{name}-min and --{name}-max must satisfy 0 < min < max, got {lo} and {hi}");
+    }
+    if points < 2 {
+        bail!("--points must be at least 2, got {points}");
+    }
+    Ok(())
+}
+
+fn simulate_stribeck(args: &SimulateStribeckArgs) -> Result<()> {
+    check_range("v", args.v_min, args.v_max, args.points)?;
+    let common = &args.common;
+    let stage = LabStage::load(&common.stage)?;
+    let mut lab = StribeckLab::paper_like(args.points, common.seed);
+    lab.speeds = log_spaced(args.v_min, args.v_max, args.points);
+    if common.exact {
+        lab = lab.exact();
+    }
+    let measured = lab.measure(&stage)?;
+    let text = stribeck_csv(
+        &measured.data,
+        known_unit(Quantity::Velocity, "mm/s"),
+        known_unit(Quantity::Force, "N"),
+    );
+    write_file(&common.out, &text)?;
+    let p = stage.friction();
+    println!(
+        "wrote {} constant-velocity runs ({} to {} m/s, both directions) to {}",
+        measured.data.len(),
+        args.v_min,
+        args.v_max,
+        common.out.display()
+    );
+    println!(
+        "true f_ss parameters of {} ({}): f_c = {} N, f_s = {} N, v_s = {} m/s, sigma2 = {} N s/m",
+        stage.friction_name(),
+        stage.source(),
+        p.f_c,
+        p.f_s,
+        p.v_s,
+        p.sigma2
+    );
+    Ok(())
+}
+
+fn simulate_frf(args: &SimulateFrfArgs) -> Result<()> {
+    check_range("f", args.f_min, args.f_max, args.points)?;
+    if !(args.amplitude > 0.0 && args.amplitude.is_finite()) {
+        bail!(
+            "--amplitude must be a positive number, got {}",
+            args.amplitude
+        );
+    }
+    let common = &args.common;
+    let stage = LabStage::load(&common.stage)?;
+    let mut lab = FrfLab::paper_like(args.points, common.seed);
+    lab.frequencies_hz = log_spaced(args.f_min, args.f_max, args.points);
+    // Absolute tolerances follow the response amplitude.
+    lab.tolerance.atol_scale *= args.amplitude / lab.force_amplitude;
+    lab.force_amplitude = args.amplitude;
+    if common.exact {
+        lab = lab.exact();
+    }
+    let measured = lab.measure(&stage)?;
+    let layout = FrfCsvLayout::MagnitudePhase(
+        known_unit(Quantity::Magnitude, "dB"),
+        known_unit(Quantity::Phase, "deg"),
+    );
+    let text = frf_csv(
+        &measured.data,
+        known_unit(Quantity::Frequency, "Hz"),
+        layout,
+    );
+    write_file(&common.out, &text)?;
+    let p = stage.friction();
+    println!(
+        "wrote {} frequencies ({} to {} Hz, force amplitude {} N) to {}",
+        measured.data.len(),
+        args.f_min,
+        args.f_max,
+        args.amplitude,
+        common.out.display()
+    );
+    println!(
+        "true pre-motion parameters of {} ({}): sigma0 = {} N/m, sigma1 = {} N s/m, \
+         sigma2 = {} N s/m, moving mass = {} kg",
+        stage.friction_name(),
+        stage.source(),
+        p.sigma0,
+        p.sigma1,
+        p.sigma2,
+        stage.moving_mass()
+    );
+    Ok(())
+}
+
+/// A unit this program names itself.
+fn known_unit(quantity: Quantity, name: &str) -> Unit {
+    Unit::parse(quantity, name).unwrap_or_else(|| panic!("{name} is a {quantity} unit"))
+}
+
+fn write_file(path: &Path, text: &str) -> Result<()> {
+    std::fs::write(path, text).with_context(|| format!("{}: cannot write", path.display()))
 }
 
 fn run_stribeck(args: &StribeckArgs) -> Result<()> {
@@ -176,6 +360,9 @@ fn run_stribeck(args: &StribeckArgs) -> Result<()> {
             &stribeck_data_vs_fit_csv(&data, &fit),
             &stribeck_curve_csv(&data, &fit, 400),
         )?;
+        write_plot(dir, |path| {
+            write_xy(&stribeck_plot(&data, &fit, asymmetric.as_ref()), path)
+        })?;
     }
     print_report(args.output.json, &json, &report.table());
     Ok(())
@@ -214,6 +401,8 @@ fn run_frf(args: &FrfArgs) -> Result<()> {
             &frf_data_vs_fit_csv(&data, &fit),
             &frf_curve_csv(&data, &fit, 400),
         )?;
+        let (title, freq_hz, series) = frf_bode(&data, &fit);
+        write_plot(dir, |path| write_bode(&title, &freq_hz, &series, path))?;
     }
     print_report(args.output.json, &json, &report.table());
     Ok(())
@@ -312,6 +501,177 @@ fn write_outputs(
     Ok(())
 }
 
+/// Writes `fit.svg` and `fit.png` into `dir` with `write`.
+fn write_plot(
+    dir: &Path,
+    write: impl Fn(&Path) -> std::result::Result<(), fistage_plot::PlotError>,
+) -> Result<()> {
+    for name in ["fit.svg", "fit.png"] {
+        write(&dir.join(name))?;
+    }
+    Ok(())
+}
+
+/// Points of the fitted curve per sign present, per branch.
+const CURVE_POINTS: usize = 300;
+
+/// The file name of a data source, for plot titles.
+fn short_name(source: &str) -> &str {
+    Path::new(source)
+        .file_name()
+        .and_then(|n| n.to_str())
+        .unwrap_or(source)
+}
+
+/// f_ss against v, in mm/s and N: the measured points (those the fit flags as
+/// outliers in a series of their own), the fitted curve and, for an asymmetric
+/// fit, the curve of each branch fitted alone.
+fn stribeck_plot(
+    data: &StribeckData,
+    fit: &StribeckFit,
+    asymmetric: Option<&AsymmetricFit>,
+) -> XyPlot {
+    let mm = |v: f64| v * 1e3;
+    let flagged = &fit.residuals.suspected_outliers;
+    let (mut kept, mut outliers) = ((Vec::new(), Vec::new()), (Vec::new(), Vec::new()));
+    for ((&v, &f), line) in data.velocity.iter().zip(&data.force).zip(&data.lines) {
+        let target = if flagged.contains(line) {
+            &mut outliers
+        } else {
+            &mut kept
+        };
+        target.0.push(mm(v));
+        target.1.push(f);
+    }
+    let mut series = vec![Series::markers("measured", kept.0, kept.1)];
+    if !outliers.0.is_empty() {
+        series.push(Series::markers(
+            format!("suspected outliers ({} fit)", fit.loss.name()),
+            outliers.0,
+            outliers.1,
+        ));
+    }
+    let (v, f) = stribeck_curve(&data.velocity, |v| fit.predict(v), None);
+    let v: Vec<f64> = v.into_iter().map(mm).collect();
+    series.push(Series::line(format!("fit ({})", fit.loss.name()), v, f));
+    if let Some(a) = asymmetric {
+        for (branch, sign, label) in [
+            (&a.positive, 1.0, "fit of v > 0 alone"),
+            (&a.negative, -1.0, "fit of v < 0 alone"),
+        ] {
+            let (v, f) = stribeck_curve(&data.velocity, |v| branch.predict(v), Some(sign));
+            let v: Vec<f64> = v.into_iter().map(mm).collect();
+            series.push(Series::line(label, v, f));
+        }
+    }
+    XyPlot::new(
+        format!(
+            "Steady-state friction of {}: data and fit",
+            short_name(&data.source)
+        ),
+        "sliding velocity v [mm/s]",
+        "steady-state friction force f_ss [N]",
+        series,
+    )
+}
+
+/// The curve `predict` over the data's range of |v| on each velocity sign
+/// present (or only on `only_sign`), log-spaced, the branches separated by a
+/// NaN (the plot bridges a gap narrower than a pixel, so on a wide velocity
+/// axis the line shows the jump of f_ss at v = 0).
+fn stribeck_curve(
+    velocity: &[f64],
+    predict: impl Fn(f64) -> f64,
+    only_sign: Option<f64>,
+) -> (Vec<f64>, Vec<f64>) {
+    let abs = velocity.iter().map(|v| v.abs());
+    let lo = abs.clone().fold(f64::INFINITY, f64::min);
+    let hi = abs.fold(0.0, f64::max);
+    let (mut vs, mut fs) = (Vec::new(), Vec::new());
+    for sign in [-1.0, 1.0] {
+        if only_sign.is_some_and(|s| s != sign) || !velocity.iter().any(|v| v * sign > 0.0) {
+            continue;
+        }
+        if !vs.is_empty() {
+            vs.push(f64::NAN);
+            fs.push(f64::NAN);
+        }
+        let mut speeds: Vec<f64> = (0..CURVE_POINTS)
+            .map(|i| lo * (hi / lo).powf(i as f64 / (CURVE_POINTS - 1) as f64))
+            .collect();
+        if sign < 0.0 {
+            speeds.reverse();
+        }
+        for speed in speeds {
+            vs.push(sign * speed);
+            fs.push(predict(sign * speed));
+        }
+    }
+    (vs, fs)
+}
+
+/// The Bode plot of an FRF fit: title, frequencies (the data's and a dense
+/// logarithmic grid, merged) and the two responses, each NaN where it has no
+/// value. Measured phases are moved by whole turns next to the model's.
+fn frf_bode(data: &FrfData, fit: &FrfFit) -> (String, Vec<f64>, Vec<BodeSeries>) {
+    let to_hz = |w: f64| w / (2.0 * std::f64::consts::PI);
+    let lo = data.omega.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = data.omega.iter().copied().fold(0.0, f64::max);
+    // (omega, index of the data point or None for a curve point)
+    let mut points: Vec<(f64, Option<usize>)> = data
+        .omega
+        .iter()
+        .enumerate()
+        .map(|(i, &w)| (w, Some(i)))
+        .collect();
+    let n = 2 * CURVE_POINTS;
+    points.extend((0..n).map(|i| (lo * (hi / lo).powf(i as f64 / (n - 1) as f64), None)));
+    points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut freq_hz = Vec::with_capacity(points.len());
+    let (mut data_mag, mut data_phase) = (Vec::new(), Vec::new());
+    let (mut fit_mag, mut fit_phase) = (Vec::new(), Vec::new());
+    for &(w, index) in &points {
+        let model = fit.response(w);
+        freq_hz.push(to_hz(w));
+        fit_mag.push(model.abs());
+        fit_phase.push(model.arg().to_degrees());
+        match index {
+            Some(i) => {
+                let g = data.response[i];
+                data_mag.push(g.abs());
+                data_phase.push((model.arg() + (g / model).arg()).to_degrees());
+            }
+            None => {
+                data_mag.push(f64::NAN);
+                data_phase.push(f64::NAN);
+            }
+        }
+    }
+    let phase = data.has_phase;
+    let series = vec![
+        BodeSeries::new(
+            "measured",
+            data_mag,
+            phase.then_some(data_phase),
+            SeriesStyle::Markers,
+        ),
+        BodeSeries::new(
+            format!(
+                "fit: sigma0 = {:.4e} N/m, sigma1 + sigma2 = {:.4} N s/m",
+                fit.sigma0.value, fit.damping.value
+            ),
+            fit_mag,
+            phase.then_some(fit_phase),
+            SeriesStyle::Line,
+        ),
+    ];
+    let title = format!(
+        "Pre-motion FRF x/F of {}: data and fit",
+        short_name(&data.source)
+    );
+    (title, freq_hz, series)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -384,9 +744,27 @@ mod tests {
         let f_c = json["f_c"]["value"].as_f64().unwrap();
         assert!((f_c / p.f_c - 1.0).abs() < 0.02, "{json}");
         assert_eq!(json["asymmetry"]["significant"], false);
-        for name in ["override.toml", "data_vs_fit.csv", "fit_curve.csv"] {
+        for name in [
+            "override.toml",
+            "data_vs_fit.csv",
+            "fit_curve.csv",
+            "fit.svg",
+            "fit.png",
+        ] {
             assert!(out_s.join(name).is_file(), "{name}");
         }
+        let svg = std::fs::read_to_string(out_s.join("fit.svg")).unwrap();
+        for text in [
+            "sliding velocity v [mm/s]",
+            "steady-state friction force f_ss [N]",
+            "measured",
+            "fit (l2)",
+            "fit of v &gt; 0 alone",
+            "fit of v &lt; 0 alone",
+        ] {
+            assert!(svg.contains(text), "fit.svg lacks {text}");
+        }
+        assert_png(&out_s.join("fit.png"));
 
         let frf = dir.join("frf.csv");
         let data = FrfSynth::noisy(&p, 1.5, 5).generate();
@@ -412,6 +790,17 @@ mod tests {
                 .unwrap();
         let sigma1 = json["sigma1"]["value"].as_f64().unwrap();
         assert!((sigma1 / p.sigma1 - 1.0).abs() < 0.05, "{json}");
+        let svg = std::fs::read_to_string(out_f.join("fit.svg")).unwrap();
+        for text in [
+            "frequency [Hz]",
+            "magnitude [dB]",
+            "phase [",
+            "measured",
+            "fit: sigma0",
+        ] {
+            assert!(svg.contains(text), "fit.svg lacks {text}");
+        }
+        assert_png(&out_f.join("fit.png"));
         let toml = std::fs::read_to_string(out_f.join("override.toml")).unwrap();
         assert!(toml.contains("[overrides.bearing_rl]"), "{toml}");
         for key in [
@@ -419,6 +808,167 @@ mod tests {
         ] {
             assert!(toml.contains(key), "{toml}");
         }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A PNG file of some substance.
+    fn assert_png(path: &Path) {
+        let bytes = std::fs::read(path).unwrap();
+        assert!(bytes.starts_with(b"\x89PNG"), "{}", path.display());
+        assert!(
+            bytes.len() > 10_000,
+            "{}: {} bytes",
+            path.display(),
+            bytes.len()
+        );
+    }
+
+    #[test]
+    fn plots_flag_outliers_and_skip_a_missing_phase() {
+        let dir = scratch("plots");
+        let p = LugreParams::paper_table1();
+        let (data, outliers) = StribeckSynth::noisy(p, 2)
+            .with_outliers(3, p.f_c)
+            .generate_with_outliers();
+        let fss = dir.join("fss.csv");
+        let text = stribeck_csv(
+            &data,
+            unit(Quantity::Velocity, "um/s"),
+            unit(Quantity::Force, "N"),
+        );
+        std::fs::write(&fss, text).unwrap();
+        let out = dir.join("robust");
+        let line = format!(
+            "identify stribeck {} --robust --out {}",
+            fss.display(),
+            out.display()
+        );
+        run(&parse(&line).unwrap()).unwrap();
+        let svg = std::fs::read_to_string(out.join("fit.svg")).unwrap();
+        assert!(svg.contains("suspected outliers (huber fit)"), "{svg}");
+        assert!(svg.contains("fit (huber)"));
+        assert!(!svg.contains("alone"));
+        // The plot's outlier series holds exactly the injected points.
+        let read = read_stribeck_csv(&fss, &UnitOverrides::default()).unwrap();
+        let fit = fit_stribeck(&read, &StribeckOptions::robust()).unwrap();
+        let plot = stribeck_plot(&read, &fit, None);
+        let flagged = &plot.series[1];
+        assert_eq!(flagged.x.len(), outliers.len());
+        for &i in &outliers {
+            assert!(
+                flagged
+                    .x
+                    .iter()
+                    .any(|&v| (v - read.velocity[i] * 1e3).abs() < 1e-9),
+                "point {i}"
+            );
+        }
+        assert_eq!(
+            plot.series[0].x.len() + flagged.x.len(),
+            read.len(),
+            "every point is drawn once"
+        );
+
+        let frf = dir.join("frf.csv");
+        let data = FrfSynth::noisy(&p, 1.5, 3).generate();
+        let layout = FrfCsvLayout::Magnitude(unit(Quantity::Magnitude, "um/N"));
+        std::fs::write(
+            &frf,
+            frf_csv(&data, unit(Quantity::Frequency, "Hz"), layout),
+        )
+        .unwrap();
+        let out = dir.join("frf");
+        let line = format!(
+            "identify frf {} --mass 1.5 --out {}",
+            frf.display(),
+            out.display()
+        );
+        run(&parse(&line).unwrap()).unwrap();
+        let svg = std::fs::read_to_string(out.join("fit.svg")).unwrap();
+        assert!(svg.contains("magnitude [dB]"));
+        assert!(
+            !svg.contains("phase ["),
+            "no phase panel without phase data"
+        );
+        assert_png(&out.join("fit.png"));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// The stage's own simulation as the lab: measure, then identify from the
+    /// written files; Table 1 comes back within a few percent.
+    #[test]
+    fn simulated_measurements_identify_table1() {
+        let dir = scratch("simulated");
+        let robot =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../robots/stage_1dof_rigid.urdf");
+        let fss = dir.join("fss.csv");
+        let line = format!(
+            "identify simulate-stribeck {} --out {} --points 12 --seed 3",
+            robot.display(),
+            fss.display()
+        );
+        run(&parse(&line).unwrap()).unwrap();
+        let header = std::fs::read_to_string(&fss).unwrap();
+        assert!(
+            header.starts_with("velocity_mm_per_s,force_N\n"),
+            "{header}"
+        );
+        assert_eq!(header.lines().count(), 25);
+        let out_s = dir.join("stribeck");
+        let line = format!(
+            "identify stribeck {} --out {}",
+            fss.display(),
+            out_s.display()
+        );
+        run(&parse(&line).unwrap()).unwrap();
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out_s.join("fit.json")).unwrap())
+                .unwrap();
+        let p = LugreParams::paper_table1();
+        for (key, truth, tolerance) in [
+            ("f_c", p.f_c, 0.01),
+            ("f_s", p.f_s, 0.01),
+            ("v_s", p.v_s, 0.05),
+            ("sigma2", p.sigma2, 0.03),
+        ] {
+            let value = json[key]["value"].as_f64().unwrap();
+            assert!((value / truth - 1.0).abs() < tolerance, "{key}: {json}");
+        }
+
+        let frf = dir.join("frf.csv");
+        let line = format!(
+            "identify simulate-frf {} --out {} --points 20",
+            robot.display(),
+            frf.display()
+        );
+        run(&parse(&line).unwrap()).unwrap();
+        let out_f = dir.join("frf");
+        let line = format!(
+            "identify frf {} --mass 1.5 --sigma2-from {} --out {}",
+            frf.display(),
+            out_s.join("fit.json").display(),
+            out_f.display()
+        );
+        run(&parse(&line).unwrap()).unwrap();
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out_f.join("fit.json")).unwrap())
+                .unwrap();
+        let sigma0 = json["sigma0"]["value"].as_f64().unwrap();
+        let sigma1 = json["sigma1"]["value"].as_f64().unwrap();
+        assert!((sigma0 / p.sigma0 - 1.0).abs() < 0.01, "{json}");
+        assert!((sigma1 / p.sigma1 - 1.0).abs() < 0.06, "{json}");
+        assert!(out_f.join("fit.svg").is_file());
+
+        // Bad ranges are refused before anything runs or is written.
+        let bad = dir.join("bad.csv");
+        let line = format!(
+            "identify simulate-frf {} --out {} --f-min 100 --f-max 10",
+            robot.display(),
+            bad.display()
+        );
+        let message = run(&parse(&line).unwrap()).unwrap_err().to_string();
+        assert!(message.contains("--f-min"), "{message}");
+        assert!(!bad.exists());
         let _ = std::fs::remove_dir_all(&dir);
     }
 

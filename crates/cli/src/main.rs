@@ -4,13 +4,18 @@ mod bench;
 mod check;
 mod figures;
 mod identify;
+mod modes;
 mod progress;
 mod run;
 
 use clap::{Parser, Subcommand};
 
 #[derive(Parser)]
-#[command(name = "fistage", version, about = "Precision motion stages with friction isolators")]
+#[command(
+    name = "fistage",
+    version,
+    about = "Precision motion stages with friction isolators"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -24,6 +29,8 @@ enum Command {
     Check(check::CheckArgs),
     /// Measure engine speed and accuracy (Markdown tables for BENCHMARKS.md).
     Bench(bench::BenchArgs),
+    /// Equilibria, eigenvalues and mode shapes (table, modes.json, top-view pictures).
+    Modes(modes::ModesArgs),
     /// Identify LuGre parameters from measured stage data.
     Identify(identify::IdentifyArgs),
 }
@@ -35,5 +42,6 @@ fn main() -> anyhow::Result<()> {
         Command::Identify(args) => identify::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Check(args) => check::run(&args),
+        Command::Modes(args) => modes::run(&args),
     }
 }

@@ -30,7 +30,10 @@ pub struct RunArgs {
 pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     let mut loaded = fistage_model::load(&args.scenario)?;
     if let Some(rtol) = args.rtol {
-        anyhow::ensure!(rtol > 0.0 && rtol < 0.1, "--rtol must be in (0, 0.1), got {rtol}");
+        anyhow::ensure!(
+            rtol > 0.0 && rtol < 0.1,
+            "--rtol must be in (0, 0.1), got {rtol}"
+        );
         loaded.scenario.solver.rtol = rtol;
     }
     let out_dir = args

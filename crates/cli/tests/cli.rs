@@ -29,19 +29,40 @@ fn run_writes_trajectory_summary_and_plots() {
         .arg(&out)
         .output()
         .expect("fistage runs");
-    assert!(status.status.success(), "{}", String::from_utf8_lossy(&status.stderr));
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
     let stdout = String::from_utf8_lossy(&status.stdout);
     assert!(stdout.contains("encoder.position [m]"), "{stdout}");
-    for file in ["trajectory.csv", "summary.json", "response.svg", "response.png", "phase.svg", "phase.png"] {
+    for file in [
+        "trajectory.csv",
+        "summary.json",
+        "response.svg",
+        "response.png",
+        "phase.svg",
+        "phase.png",
+    ] {
         assert!(out.join(file).is_file(), "missing {file}");
     }
     let csv = std::fs::read_to_string(out.join("trajectory.csv")).expect("csv");
     let header = csv.lines().next().expect("header");
-    assert!(header.starts_with("time [s],encoder.position [m],encoder.velocity [m/s]"), "{header}");
-    assert_eq!(csv.lines().count(), 1 + 5001, "5 s at 1 kHz plus the header");
+    assert!(
+        header.starts_with("time [s],encoder.position [m],encoder.velocity [m/s]"),
+        "{header}"
+    );
+    assert_eq!(
+        csv.lines().count(),
+        1 + 5001,
+        "5 s at 1 kHz plus the header"
+    );
     let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("json")).expect("valid json");
-    let mean = summary["signals"]["encoder.position"]["mean"].as_f64().expect("mean");
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("json"))
+            .expect("valid json");
+    let mean = summary["signals"]["encoder.position"]["mean"]
+        .as_f64()
+        .expect("mean");
     // The rigid stage settles where the servo holds the steady friction: x = -f_ss(-20 mm/s) / k.
     let lugre = fistage_model::LugreParams::paper_table1();
     let expected = -lugre.steady_state_force(-0.02) / 6e4;
@@ -65,12 +86,24 @@ fn bad_scenario_names_the_key_and_writes_nothing() {
     )
     .expect("write");
     let out = dir.join("out");
-    let result = fistage().arg("run").arg(&scenario).arg("--out").arg(&out).output().expect("runs");
+    let result = fistage()
+        .arg("run")
+        .arg(&scenario)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("runs");
     assert!(!result.status.success());
     let stderr = String::from_utf8_lossy(&result.stderr);
-    assert!(stderr.contains("bad.toml") && stderr.contains("overrides.bearing_friction.sigma0"), "{stderr}");
+    assert!(
+        stderr.contains("bad.toml") && stderr.contains("overrides.bearing_friction.sigma0"),
+        "{stderr}"
+    );
     assert!(stderr.contains("sigma0 must be > 0, got -3"), "{stderr}");
-    assert!(!out.exists(), "a failed run must not create its output folder");
+    assert!(
+        !out.exists(),
+        "a failed run must not create its output folder"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 

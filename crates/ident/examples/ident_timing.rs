@@ -1,10 +1,12 @@
 //! Times the standard identification cases: the 80-point Table 1 f_ss curve
 //! (least squares, Huber, L1, asymmetric) and the 100-point Table 1 FRF (known
-//! and fitted mass, complex and magnitude-only). Run with
-//! `cargo run --release -p fistage-ident --example ident_timing`.
+//! and fitted mass, complex and magnitude-only); then the simulated lab tests
+//! of the rigid stage (40 constant-velocity runs, a 30-frequency stepped sine).
+//! Run with `cargo run --release -p fistage-ident --example ident_timing`.
 
 use std::time::{Duration, Instant};
 
+use fistage_ident::lab::{FrfLab, LabStage, StribeckLab};
 use fistage_ident::synth::{TABLE1_MASS, benchmark_frf_data, benchmark_stribeck_data};
 use fistage_ident::{
     FrfOptions, Loss, StribeckOptions, fit_frf, fit_stribeck, fit_stribeck_asymmetric,
@@ -68,4 +70,18 @@ fn main() {
         });
         report(&format!("{title}, {name}"), t);
     }
+
+    let robot =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../robots/stage_1dof_rigid.urdf");
+    let stage = LabStage::load(&robot).expect("the rigid stage");
+    let t = time(5, || {
+        StribeckLab::paper_like(20, 1)
+            .measure(&stage)
+            .expect("f_ss test");
+    });
+    report("simulated f_ss test, 40 runs", t);
+    let t = time(5, || {
+        FrfLab::paper_like(30, 1).measure(&stage).expect("FRF test");
+    });
+    report("simulated FRF test, 30 frequencies", t);
 }

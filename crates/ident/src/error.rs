@@ -84,6 +84,17 @@ pub enum IdentError {
     /// An option given to a fit is out of range.
     #[error("invalid option: {0}")]
     InvalidOption(String),
+    /// The stage to simulate could not be loaded (robot or scenario file).
+    #[error(transparent)]
+    Load(#[from] fistage_model::LoadError),
+    /// A simulated measurement could not be made.
+    #[error("{file}: {message}")]
+    Simulation {
+        /// The robot or scenario file of the stage.
+        file: String,
+        /// What went wrong.
+        message: String,
+    },
     /// The convex solver did not return a solution.
     #[error("{file}: the solver failed: {message}")]
     Solver {

@@ -3,11 +3,14 @@
 //! * [`csv_input`] reads lab CSV files (units from column-name suffixes or flags,
 //!   converted to SI);
 //! * [`stribeck`] fits f_C, f_S, v_s and sigma2 to the steady-state curve by a
-//!   convex program per v_s (Clarabel) and a global one-dimensional search, with
-//!   L2, Huber or L1 loss and an asymmetry test;
+//!   convex program per v_s (Clarabel for least squares; exact active-set
+//!   solvers, Clarabel as their fallback, for the robust losses) and a global
+//!   one-dimensional search, with L2, Huber or L1 loss and an asymmetry test;
 //! * [`frf`] fits sigma0, sigma1 + sigma2 (and the mass) to the pre-motion FRF;
 //! * [`uncertainty`] gives 95% intervals and residual statistics;
 //! * [`synth`] makes seeded synthetic data from known parameters;
+//! * [`lab`] measures f_ss(v) and the FRF on the simulated stage (fistage's own
+//!   engine), as a lab would, sensor errors included;
 //! * [`report`] turns fits into JSON, a table and a scenario override.
 //!
 //! ```
@@ -25,7 +28,9 @@
 mod complex;
 pub mod csv_input;
 mod error;
+mod exact;
 pub mod frf;
+pub mod lab;
 mod linalg;
 mod lm;
 mod qp;

@@ -14,13 +14,47 @@
 //! Columns and data are scaled to unit norm before solving; a column that is
 //! numerically zero (e.g. a Stribeck term far below the data's velocities) is
 //! held at zero.
+//!
+//! The robust programs are first given to the exact solvers of
+//! [`crate::exact`] (a finite active-set Newton method for Huber, a vertex
+//! method for L1), which certify their answer by the KKT conditions; Clarabel
+//! solves them only when that fails. Both give the optimum of the same convex
+//! program; the exact solvers do it in microseconds and to rounding accuracy.
 
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
     DefaultSettings, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus, SupportedConeT,
 };
 
+use std::cell::Cell;
+
+use crate::exact;
 use crate::linalg::{Mat, least_squares};
+
+/// How the robust programs are solved.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Method {
+    /// The exact solvers, Clarabel where they cannot certify the optimum.
+    Exact,
+    /// Clarabel only, with its default tolerances (the method before the
+    /// exact solvers; kept for comparisons).
+    #[cfg_attr(not(test), allow(dead_code))]
+    Clarabel,
+    /// Clarabel only, with tolerances tightened to 1e-12 (a reference for tests).
+    #[cfg_attr(not(test), allow(dead_code))]
+    ClarabelTight,
+}
+
+thread_local! {
+    /// Robust programs that the exact solvers handed to Clarabel on this thread.
+    static CLARABEL_FALLBACKS: Cell<usize> = const { Cell::new(0) };
+}
+
+/// How many robust programs fell back to Clarabel so far on this thread.
+#[cfg_attr(not(test), allow(dead_code))]
+pub(crate) fn clarabel_fallbacks() -> usize {
+    CLARABEL_FALLBACKS.with(Cell::get)
+}
 
 /// The loss of a regression, with its threshold resolved.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -65,6 +99,17 @@ pub(crate) fn regression(
     nonnegative: &[bool],
     loss: RegressionLoss,
 ) -> Result<Vec<f64>, String> {
+    regression_with(a, y, nonnegative, loss, Method::Exact)
+}
+
+/// [`regression`] with a choice of solver for the robust programs.
+pub(crate) fn regression_with(
+    a: &Mat,
+    y: &[f64],
+    nonnegative: &[bool],
+    loss: RegressionLoss,
+    method: Method,
+) -> Result<Vec<f64>, String> {
     let norms = a.column_norms();
     let largest = norms.iter().copied().fold(0.0, f64::max);
     let active: Vec<usize> = (0..a.cols)
@@ -83,10 +128,35 @@ pub(crate) fn regression(
     }
     let y_scaled: Vec<f64> = y.iter().map(|v| v / y_scale).collect();
     let bounded: Vec<bool> = active.iter().map(|&c| nonnegative[c]).collect();
+    let tight = method == Method::ClarabelTight;
+    let exact_first = method == Method::Exact;
+    let fallback = |found: Option<Vec<f64>>| {
+        if found.is_none() && exact_first {
+            CLARABEL_FALLBACKS.with(|n| n.set(n.get() + 1));
+        }
+        found
+    };
     let solution = match loss {
         RegressionLoss::L2 => solve_l2(&scaled, &y_scaled, &bounded)?,
-        RegressionLoss::Huber(delta) => solve_huber(&scaled, &y_scaled, &bounded, delta / y_scale)?,
-        RegressionLoss::L1 => solve_l1(&scaled, &y_scaled, &bounded)?,
+        RegressionLoss::Huber(delta) => {
+            let delta = delta / y_scale;
+            let found = exact_first
+                .then(|| exact::huber(&scaled, &y_scaled, &bounded, delta))
+                .flatten();
+            match fallback(found) {
+                Some(x) => x,
+                None => solve_huber(&scaled, &y_scaled, &bounded, delta, tight)?,
+            }
+        }
+        RegressionLoss::L1 => {
+            let found = exact_first
+                .then(|| exact::l1(&scaled, &y_scaled, &bounded))
+                .flatten();
+            match fallback(found) {
+                Some(x) => x,
+                None => solve_l1(&scaled, &y_scaled, &bounded, tight)?,
+            }
+        }
     };
     for (k, &c) in active.iter().enumerate() {
         let value = solution[k] * y_scale / norms[c];
@@ -148,8 +218,14 @@ impl Constraints {
     }
 }
 
-/// Runs Clarabel on `min 1/2 x'Px + q'x` with the nonnegative-cone constraints.
-fn solve(p: &CscMatrix<f64>, q: &[f64], constraints: &Constraints) -> Result<Vec<f64>, String> {
+/// Runs Clarabel on `min 1/2 x'Px + q'x` with the nonnegative-cone constraints
+/// (to tolerances of 1e-12 if `tight`, Clarabel's defaults otherwise).
+fn solve(
+    p: &CscMatrix<f64>,
+    q: &[f64],
+    constraints: &Constraints,
+    tight: bool,
+) -> Result<Vec<f64>, String> {
     let n = q.len();
     let a = constraints.matrix(n);
     let cones: Vec<SupportedConeT<f64>> = if constraints.b.is_empty() {
@@ -157,11 +233,18 @@ fn solve(p: &CscMatrix<f64>, q: &[f64], constraints: &Constraints) -> Result<Vec
     } else {
         vec![NonnegativeConeT(constraints.b.len())]
     };
-    let settings = DefaultSettings {
+    let mut settings = DefaultSettings {
         verbose: false,
         presolve_enable: false,
         ..DefaultSettings::default()
     };
+    if tight {
+        settings.tol_gap_abs = 1e-12;
+        settings.tol_gap_rel = 1e-12;
+        settings.tol_feas = 1e-12;
+        settings.tol_ktratio = 1e-10;
+        settings.max_iter = 400;
+    }
     let mut solver = DefaultSolver::new(p, q, &a, &constraints.b, &cones, settings)
         .map_err(|e| format!("problem setup: {e}"))?;
     solver.solve();
@@ -195,7 +278,7 @@ fn solve_l2(a: &Mat, y: &[f64], bounded: &[bool]) -> Result<Vec<f64>, String> {
     let q: Vec<f64> = columns.iter().map(|c| -dot(c, y)).collect();
     let mut constraints = Constraints::new();
     constraints.add_nonnegative(bounded);
-    let x = solve(&p, &q, &constraints)?;
+    let x = solve(&p, &q, &constraints, false)?;
     Ok(polish_l2(a, y, bounded, &x).unwrap_or(x))
 }
 
@@ -231,7 +314,13 @@ fn polish_l2(a: &Mat, y: &[f64], bounded: &[bool], x: &[f64]) -> Option<Vec<f64>
     Some(polished)
 }
 
-fn solve_huber(a: &Mat, y: &[f64], bounded: &[bool], delta: f64) -> Result<Vec<f64>, String> {
+fn solve_huber(
+    a: &Mat,
+    y: &[f64],
+    bounded: &[bool],
+    delta: f64,
+    tight: bool,
+) -> Result<Vec<f64>, String> {
     let (m, p) = (a.rows, a.cols);
     // Variables: x (p), u (m), t (m).
     let n = p + 2 * m;
@@ -256,11 +345,11 @@ fn solve_huber(a: &Mat, y: &[f64], bounded: &[bool], delta: f64) -> Result<Vec<f
         constraints.add_le(row.chain([(u(i), 1.0), (t(i), -1.0)]), -yi);
     }
     constraints.add_nonnegative(bounded);
-    let x = solve(&pmat, &q, &constraints)?;
+    let x = solve(&pmat, &q, &constraints, tight)?;
     Ok(x[..p].to_vec())
 }
 
-fn solve_l1(a: &Mat, y: &[f64], bounded: &[bool]) -> Result<Vec<f64>, String> {
+fn solve_l1(a: &Mat, y: &[f64], bounded: &[bool], tight: bool) -> Result<Vec<f64>, String> {
     let (m, p) = (a.rows, a.cols);
     // Variables: x (p), t (m).
     let n = p + m;
@@ -278,7 +367,7 @@ fn solve_l1(a: &Mat, y: &[f64], bounded: &[bool]) -> Result<Vec<f64>, String> {
         constraints.add_le(row.chain([(t(i), -1.0)]), -yi);
     }
     constraints.add_nonnegative(bounded);
-    let x = solve(&pmat, &q, &constraints)?;
+    let x = solve(&pmat, &q, &constraints, tight)?;
     Ok(x[..p].to_vec())
 }
 

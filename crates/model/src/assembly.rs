@@ -11,8 +11,8 @@ use nalgebra::{Isometry3, Matrix3, Vector3};
 use crate::dynamics;
 use crate::error::LoadError;
 use crate::model::{
-    Body, Controller, Frame, FrictionContact, Isolator, Joint, JointMotion, Model, PointAxis,
-    SignalInfo, StateKind, StateLayout,
+    Body, Controller, Frame, FrictionContact, Isolator, Joint, JointMotion, MassBlock, Model,
+    PointAxis, SignalInfo, StateKind, StateLayout,
 };
 use crate::robot::{JointKind, PointAxisSpec, RobotSpec};
 use crate::scenario::Scenario;
@@ -84,15 +84,19 @@ pub fn apply_overrides(robot: &mut RobotSpec, scenario: &Scenario) -> Result<(),
                 allowed.extend(POINT_KEYS);
                 return Err(unknown_key(&allowed));
             }
-            friction
-                .lugre
-                .validate()
-                .map_err(|e| scenario.error(&key_path, e.to_string()))?;
         } else if let Some(isolator) = robot.isolators.iter_mut().find(|i| i.name == o.target) {
+            if let Some(axis) = POINT_KEYS.iter().position(|k| *k == o.key) {
+                isolator.origin.translation.vector[axis] = o.value;
+                continue;
+            }
             let index = ISOLATOR_KEYS
                 .iter()
                 .position(|k| *k == o.key)
-                .ok_or_else(|| unknown_key(&ISOLATOR_KEYS))?;
+                .ok_or_else(|| {
+                    let mut allowed = ISOLATOR_KEYS.to_vec();
+                    allowed.extend(POINT_KEYS);
+                    unknown_key(&allowed)
+                })?;
             if o.value < 0.0 {
                 return Err(scenario.error(&key_path, format!("must be >= 0, got {}", o.value)));
             }
@@ -132,6 +136,26 @@ pub fn apply_overrides(robot: &mut RobotSpec, scenario: &Scenario) -> Result<(),
                     robot.file.display()
                 ),
             ));
+        }
+    }
+    // Check each friction element once all its overrides are in (f_c may rise
+    // above the file's f_s as long as f_s rises too).
+    for friction in &robot.frictions {
+        if let Err(e) = friction.lugre.validate() {
+            let key = scenario
+                .overrides
+                .iter()
+                .rev()
+                .find(|o| o.target == friction.name && o.key == e.name)
+                .or_else(|| {
+                    scenario
+                        .overrides
+                        .iter()
+                        .find(|o| o.target == friction.name)
+                })
+                .map(|o| format!("overrides.{}.{}", o.target, o.key))
+                .unwrap_or_else(|| format!("overrides.{}", friction.name));
+            return Err(scenario.error(key, e.to_string()));
         }
     }
     Ok(())
@@ -221,8 +245,10 @@ impl<'a> Assembler<'a> {
         let (mut q_offset, mut v_offset) = (0, 0);
         while let Some(link) = stack.pop() {
             let placement = self.placements[link];
-            // Reverse so that children are visited in file order.
-            for joint in robot.joints.iter().rev().filter(|j| j.parent == link) {
+            // Children get their bodies in file order; the stack then visits them in
+            // that order too.
+            let children: Vec<_> = robot.joints.iter().filter(|j| j.parent == link).collect();
+            for joint in &children {
                 let origin_in_body = placement.link_in_body * joint.origin;
                 let child_placement = match joint.kind {
                     JointKind::Fixed => Placement {
@@ -262,6 +288,8 @@ impl<'a> Assembler<'a> {
                             com: Vector3::zeros(),
                             inertia: Matrix3::zeros(),
                             chain,
+                            block: 0,
+                            chain_local: Vec::new(),
                         });
                         q_offset += motion.nq();
                         v_offset += motion.nv();
@@ -466,6 +494,7 @@ impl<'a> Assembler<'a> {
                 axis: resolved.axis,
                 lugre: spec.lugre,
                 z_index,
+                zero_offset: resolved.zero_offset,
             });
         }
         let nz = frictions.len();
@@ -579,6 +608,7 @@ impl<'a> Assembler<'a> {
             constant_mass_inverse: None,
             translational: false,
             translational_map: None,
+            mass_blocks: Vec::new(),
         };
         model.signals = signal_list(&model);
         check_mass_matrix(&mut model, &robot.file)?;
@@ -660,6 +690,53 @@ fn signal_list(model: &Model) -> Vec<SignalInfo> {
     signals
 }
 
+/// Groups bodies by the subtree they hang in, numbers each block's dofs, and
+/// inverts the blocks that never change.
+fn mass_blocks(model: &mut Model, mass: &nalgebra::DMatrix<f64>) -> Vec<MassBlock> {
+    let mut blocks: Vec<MassBlock> = Vec::new();
+    for index in 0..model.bodies.len() {
+        let block = match model.bodies[index].parent {
+            None => {
+                blocks.push(MassBlock {
+                    dofs: Vec::new(),
+                    bodies: Vec::new(),
+                    constant_inverse: None,
+                });
+                blocks.len() - 1
+            }
+            Some(parent) => model.bodies[parent].block,
+        };
+        let body = &mut model.bodies[index];
+        body.block = block;
+        let v0 = body.joint.v_offset;
+        blocks[block].dofs.extend(v0..v0 + body.joint.motion.nv());
+        blocks[block].bodies.push(index);
+    }
+    for block in &mut blocks {
+        block.dofs.sort_unstable();
+        let rotates = block
+            .bodies
+            .iter()
+            .any(|&b| model.bodies[b].joint.motion.rotates());
+        if !rotates {
+            let k = block.dofs.len();
+            let sub = nalgebra::DMatrix::from_fn(k, k, |r, c| mass[(block.dofs[r], block.dofs[c])]);
+            block.constant_inverse = sub
+                .try_inverse()
+                .map(|inverse| (0..k * k).map(|i| inverse[(i / k, i % k)]).collect());
+        }
+    }
+    for body in &mut model.bodies {
+        let dofs = &blocks[body.block].dofs;
+        body.chain_local = body
+            .chain
+            .iter()
+            .map(|d| dofs.iter().position(|x| x == d).unwrap_or(0))
+            .collect();
+    }
+    blocks
+}
+
 /// The mass matrix must be positive definite at the zero configuration (every
 /// degree of freedom carries mass or inertia); when no joint rotates a body it
 /// is constant and its factor is kept.
@@ -682,6 +759,7 @@ fn check_mass_matrix(model: &mut Model, file: &Path) -> Result<(), LoadError> {
             "the mass matrix is singular: a degree of freedom has no mass or inertia (check the <inertia> of this link)",
         ));
     };
+    model.mass_blocks = mass_blocks(model, &mass);
     if model.bodies.iter().all(|b| !b.joint.motion.rotates()) {
         model.constant_mass_inverse = Some(factor.inverse());
         model.constant_mass = Some(factor);

@@ -63,6 +63,8 @@ pub struct Workspace<S: Scalar = f64> {
     jacobian: Vec<(Vector3<S>, Vector3<S>)>,
     mass: DMatrix<S>,
     tau: DVector<S>,
+    block_mass: Vec<Vec<S>>,
+    block_rhs: Vec<Vec<S>>,
     pub(crate) generalized: Vec<f64>,
     /// Per-element results of the last evaluation.
     pub elements: ElementValues<S>,
@@ -77,6 +79,8 @@ pub struct ElementValues<S = f64> {
     pub slip_velocity: Vec<S>,
     /// Bristle rate z' per contact, m/s.
     pub z_rate: Vec<S>,
+    /// Displacement of each contact point along its axis from the zero configuration, m.
+    pub contact_displacement: Vec<S>,
     /// Force per actuator, N.
     pub actuator_force: Vec<S>,
     /// Reading per sensor, m.
@@ -142,11 +146,22 @@ impl Model {
             jacobian: Vec::with_capacity(nv),
             mass: DMatrix::zeros(nv, nv),
             tau: DVector::zeros(nv),
+            block_mass: self
+                .mass_blocks
+                .iter()
+                .map(|b| vec![S::zero(); b.dofs.len() * b.dofs.len()])
+                .collect(),
+            block_rhs: self
+                .mass_blocks
+                .iter()
+                .map(|b| vec![S::zero(); b.dofs.len()])
+                .collect(),
             generalized: vec![0.0; nv],
             elements: ElementValues {
                 friction_force: vec![S::zero(); nf],
                 slip_velocity: vec![S::zero(); nf],
                 z_rate: vec![S::zero(); nf],
+                contact_displacement: vec![S::zero(); nf],
                 actuator_force: vec![S::zero(); na],
                 sensor_position: vec![S::zero(); ns],
                 sensor_velocity: vec![S::zero(); ns],
@@ -282,21 +297,28 @@ impl Model {
         let nq = self.layout.nq;
         for (i, body) in self.bodies.iter().enumerate() {
             let zero = Vector3::zeros();
-            let (parent_rotation, parent_origin, parent_omega, parent_velocity, parent_alpha, parent_accel) =
-                match body.parent {
-                    Some(p) => (
-                        ws.rotation[p],
-                        ws.origin[p],
-                        ws.omega[p],
-                        ws.velocity[p],
-                        ws.bias_alpha[p],
-                        ws.bias_accel[p],
-                    ),
-                    None => (Matrix3::identity(), zero, zero, zero, zero, zero),
-                };
+            let (
+                parent_rotation,
+                parent_origin,
+                parent_omega,
+                parent_velocity,
+                parent_alpha,
+                parent_accel,
+            ) = match body.parent {
+                Some(p) => (
+                    ws.rotation[p],
+                    ws.origin[p],
+                    ws.omega[p],
+                    ws.velocity[p],
+                    ws.bias_alpha[p],
+                    ws.bias_accel[p],
+                ),
+                None => (Matrix3::identity(), zero, zero, zero, zero, zero),
+            };
             let joint = &body.joint;
             let joint_rotation = parent_rotation * cast33::<S>(&joint.origin_rotation);
-            let joint_origin = parent_origin + parent_rotation * cast3::<S>(&joint.origin.translation.vector);
+            let joint_origin =
+                parent_origin + parent_rotation * cast3::<S>(&joint.origin.translation.vector);
             let (q0, v0) = (joint.q_offset, joint.v_offset);
             let mut linear_rate = Vector3::zeros();
             let mut angular_rate = Vector3::zeros();
@@ -312,7 +334,8 @@ impl Model {
                     ws.dof_axis[v0] = s;
                     ws.dof_center[v0] = joint_origin;
                     angular_rate = s * x[nq + v0];
-                    let turn = Rotation3::from_axis_angle(&Unit::new_unchecked(cast3::<S>(&axis)), x[q0]);
+                    let turn =
+                        Rotation3::from_axis_angle(&Unit::new_unchecked(cast3::<S>(&axis)), x[q0]);
                     (joint_rotation * turn.matrix(), joint_origin)
                 }
                 JointMotion::Floating => {
@@ -346,11 +369,20 @@ impl Model {
 
     fn isolator_forces<S: Scalar>(&self, ws: &mut Workspace<S>) {
         for (k, isolator) in self.isolators.iter().enumerate() {
-            let parent_rotation = frame_rotation(isolator.parent, ws) * cast33::<S>(&isolator.attach_rotations[0]);
-            let child_rotation = frame_rotation(isolator.child, ws) * cast33::<S>(&isolator.attach_rotations[1]);
-            let (parent_point, _) = point_state(isolator.parent, &isolator.parent_attach.translation.vector, ws);
-            let (child_point, child_point_velocity) =
-                point_state(isolator.child, &isolator.child_attach.translation.vector, ws);
+            let parent_rotation =
+                frame_rotation(isolator.parent, ws) * cast33::<S>(&isolator.attach_rotations[0]);
+            let child_rotation =
+                frame_rotation(isolator.child, ws) * cast33::<S>(&isolator.attach_rotations[1]);
+            let (parent_point, _) = point_state(
+                isolator.parent,
+                &isolator.parent_attach.translation.vector,
+                ws,
+            );
+            let (child_point, child_point_velocity) = point_state(
+                isolator.child,
+                &isolator.child_attach.translation.vector,
+                ws,
+            );
             // Velocity of the parent's material point that coincides with the child attach point.
             let parent_velocity_there = match isolator.parent {
                 Frame::World => Vector3::zeros(),
@@ -360,7 +392,8 @@ impl Model {
             let translation = to_local * (child_point - parent_point);
             let translation_rate = to_local * (child_point_velocity - parent_velocity_there);
             let rotation = rotation_log(&(to_local * child_rotation));
-            let rotation_rate = to_local * (frame_omega(isolator.child, ws) - frame_omega(isolator.parent, ws));
+            let rotation_rate =
+                to_local * (frame_omega(isolator.child, ws) - frame_omega(isolator.parent, ws));
             let (k_, c_) = (&isolator.stiffness, &isolator.damping);
             let law = |axis: usize, d: S, rate: S| {
                 -(S::constant(k_[axis]) * d + S::constant(c_[axis]) * rate)
@@ -379,8 +412,14 @@ impl Model {
             let torque = parent_rotation * local_torque;
             apply_wrench(ws, isolator.child, &child_point, &force, &torque);
             apply_wrench(ws, isolator.parent, &child_point, &-force, &-torque);
-            ws.elements.isolator_deflection[k] =
-                [translation.x, translation.y, translation.z, rotation.x, rotation.y, rotation.z];
+            ws.elements.isolator_deflection[k] = [
+                translation.x,
+                translation.y,
+                translation.z,
+                rotation.x,
+                rotation.y,
+                rotation.z,
+            ];
             ws.elements.isolator_rate[k] = [
                 translation_rate.x,
                 translation_rate.y,
@@ -398,15 +437,24 @@ impl Model {
             let axis = cast3::<S>(&friction.axis);
             let (point, point_velocity) = point_state(frame, &friction.point, ws);
             let slip = point_velocity.dot(&axis) - inputs.platform_velocity;
-            let (force, z_rate) = friction.lugre.force_and_z_rate_of(slip, x[friction.z_index]);
+            let (force, z_rate) = friction
+                .lugre
+                .force_and_z_rate_of(slip, x[friction.z_index]);
             apply_wrench(ws, frame, &point, &(axis * -force), &Vector3::zeros());
             ws.elements.friction_force[k] = force;
             ws.elements.slip_velocity[k] = slip;
             ws.elements.z_rate[k] = z_rate;
+            ws.elements.contact_displacement[k] =
+                point.dot(&axis) - S::constant(friction.zero_offset);
         }
     }
 
-    fn sensors_and_servo<S: Scalar>(&self, x: &[S], inputs: &InputValues<S>, ws: &mut Workspace<S>) {
+    fn sensors_and_servo<S: Scalar>(
+        &self,
+        x: &[S],
+        inputs: &InputValues<S>,
+        ws: &mut Workspace<S>,
+    ) {
         for (k, sensor) in self.sensors.iter().enumerate() {
             let axis = cast3::<S>(&sensor.axis);
             let (point, velocity) = point_state(Frame::Body(sensor.body), &sensor.point, ws);
@@ -437,7 +485,8 @@ impl Model {
             let inertial_force = (accel_com - gravity) * S::constant(body.mass);
             let mut inertial_moment = com.cross(&inertial_force);
             if !self.translational {
-                let inertia = ws.rotation[i] * cast33::<S>(&body.inertia) * ws.rotation[i].transpose();
+                let inertia =
+                    ws.rotation[i] * cast33::<S>(&body.inertia) * ws.rotation[i].transpose();
                 inertial_moment += inertia * alpha + omega.cross(&(inertia * omega));
             }
             ws.force[i] = inertial_force - ws.force[i];
@@ -460,28 +509,42 @@ impl Model {
                 ws.moment[p] += moment;
             }
         }
-        match &self.constant_mass_inverse {
-            Some(inverse) => {
-                let nv = self.layout.nv;
-                let tau: Vec<S> = ws.tau.iter().copied().collect();
-                for row in 0..nv {
-                    ws.tau[row] = (0..nv).fold(S::zero(), |sum, col| {
-                        sum + S::constant(inverse[(row, col)]) * tau[col]
-                    });
-                }
+        for (index, block) in self.mass_blocks.iter().enumerate() {
+            let k = block.dofs.len();
+            let rhs = &mut ws.block_rhs[index];
+            for (local, &dof) in block.dofs.iter().enumerate() {
+                rhs[local] = ws.tau[dof];
             }
-            None => {
-                fill_mass_matrix(self, ws);
-                let mass = std::mem::replace(&mut ws.mass, DMatrix::zeros(0, 0));
-                match mass.cholesky() {
-                    Some(factor) => {
-                        factor.solve_mut(&mut ws.tau);
-                        ws.mass = factor.unpack();
+            match &block.constant_inverse {
+                Some(inverse) => {
+                    for (local, &dof) in block.dofs.iter().enumerate() {
+                        ws.tau[dof] = (0..k).fold(S::zero(), |sum, col| {
+                            sum + S::constant(inverse[local * k + col]) * rhs[col]
+                        });
                     }
-                    None => {
-                        // Singular only for degenerate configurations: make it visible.
-                        ws.tau.fill(S::constant(f64::NAN));
-                        ws.mass = DMatrix::zeros(self.layout.nv, self.layout.nv);
+                }
+                None => {
+                    fill_block_mass(
+                        self,
+                        block,
+                        &mut ws.block_mass[index],
+                        ws_kinematics(
+                            &ws.rotation,
+                            &ws.origin,
+                            &ws.dof_axis,
+                            &ws.dof_center,
+                            &ws.dof_angular,
+                        ),
+                    );
+                    let solved =
+                        cholesky_solve(&mut ws.block_mass[index], &mut ws.block_rhs[index]);
+                    for (local, &dof) in block.dofs.iter().enumerate() {
+                        ws.tau[dof] = if solved {
+                            ws.block_rhs[index][local]
+                        } else {
+                            // Singular only for degenerate configurations: make it visible.
+                            S::constant(f64::NAN)
+                        };
                     }
                 }
             }
@@ -512,7 +575,11 @@ impl Model {
 }
 
 /// World position and velocity of a point given in a body frame.
-fn point_state<S: Scalar>(frame: Frame, point: &Vector3<f64>, ws: &Workspace<S>) -> (Vector3<S>, Vector3<S>) {
+fn point_state<S: Scalar>(
+    frame: Frame,
+    point: &Vector3<f64>,
+    ws: &Workspace<S>,
+) -> (Vector3<S>, Vector3<S>) {
     let point = cast3::<S>(point);
     match frame {
         Frame::World => (point, Vector3::zeros()),
@@ -539,7 +606,12 @@ fn frame_omega<S: Scalar>(frame: Frame, ws: &Workspace<S>) -> Vector3<S> {
 
 /// The unit quaternion stored at `x[start..start + 4]` as (w, x, y, z), normalised.
 pub fn quaternion_at<S: Scalar>(x: &[S], start: usize) -> UnitQuaternion<S> {
-    UnitQuaternion::from_quaternion(Quaternion::new(x[start], x[start + 1], x[start + 2], x[start + 3]))
+    UnitQuaternion::from_quaternion(Quaternion::new(
+        x[start],
+        x[start + 1],
+        x[start + 2],
+        x[start + 3],
+    ))
 }
 
 /// Bushing law along one attach axis: force (or torque) on the child.
@@ -562,7 +634,8 @@ pub(crate) fn servo_force<S: Scalar>(
     let servo_actuator = match &model.controller {
         Some(controller) => {
             let error = elements.sensor_position[controller.sensor] - inputs.reference_position;
-            let error_rate = elements.sensor_velocity[controller.sensor] - inputs.reference_velocity;
+            let error_rate =
+                elements.sensor_velocity[controller.sensor] - inputs.reference_velocity;
             let integral = controller.integral_index.map_or(S::zero(), |i| x[i]);
             elements.tracking_error = error;
             elements.actuator_force[controller.actuator] = -(S::constant(controller.k) * error
@@ -580,13 +653,19 @@ pub(crate) fn servo_force<S: Scalar>(
 /// The rotation vector (axis times angle) of a rotation matrix.
 fn rotation_log<S: Scalar>(r: &Matrix3<S>) -> Vector3<S> {
     let half = S::constant(0.5);
-    let skew = Vector3::new(r[(2, 1)] - r[(1, 2)], r[(0, 2)] - r[(2, 0)], r[(1, 0)] - r[(0, 1)]) * half;
-    let sin = skew.norm();
+    let skew = Vector3::new(
+        r[(2, 1)] - r[(1, 2)],
+        r[(0, 2)] - r[(2, 0)],
+        r[(1, 0)] - r[(0, 1)],
+    ) * half;
+    let sin_squared = skew.norm_squared();
     let cos = (r.trace() - S::one()) * half;
-    if sin.value() < 1e-6 {
-        // angle / sin(angle) = 1 + angle^2 / 6 + ...
-        return skew * (S::one() + sin * sin / S::constant(6.0));
+    if sin_squared.value() < 1e-12 {
+        // angle / sin(angle) = 1 + angle^2 / 6 + ...; no square root, which has
+        // no derivative at zero.
+        return skew * (S::one() + sin_squared / S::constant(6.0));
     }
+    let sin = sin_squared.sqrt();
     if cos.value() > -0.99 {
         return skew * (sin.atan2(cos) / sin);
     }
@@ -607,11 +686,146 @@ fn apply_wrench<S: Scalar>(
     }
 }
 
+impl Model {
+    /// World pose (rotation, origin) of every body at state x.
+    pub fn body_poses(&self, x: &[f64]) -> Vec<(Matrix3<f64>, Vector3<f64>)> {
+        let mut ws = self.workspace();
+        self.kinematics(x, &mut ws);
+        ws.rotation
+            .iter()
+            .copied()
+            .zip(ws.origin.iter().copied())
+            .collect()
+    }
+}
+
 impl Workspace<f64> {
     /// World velocity of a point (body frame coordinates) after [`Model::evaluate`].
     pub(crate) fn point_velocity(&self, body: usize, point: &Vector3<f64>) -> Vector3<f64> {
         self.velocity[body] + self.omega[body].cross(&(self.rotation[body] * point))
     }
+}
+
+/// Kinematic quantities the mass matrix needs, borrowed from a workspace.
+struct Kinematics<'a, S: Scalar> {
+    rotation: &'a [Matrix3<S>],
+    origin: &'a [Vector3<S>],
+    dof_axis: &'a [Vector3<S>],
+    dof_center: &'a [Vector3<S>],
+    dof_angular: &'a [bool],
+}
+
+fn ws_kinematics<'a, S: Scalar>(
+    rotation: &'a [Matrix3<S>],
+    origin: &'a [Vector3<S>],
+    dof_axis: &'a [Vector3<S>],
+    dof_center: &'a [Vector3<S>],
+    dof_angular: &'a [bool],
+) -> Kinematics<'a, S> {
+    Kinematics {
+        rotation,
+        origin,
+        dof_axis,
+        dof_center,
+        dof_angular,
+    }
+}
+
+/// One diagonal block of the mass matrix (row-major, block-local indices).
+fn fill_block_mass<S: Scalar>(
+    model: &Model,
+    block: &crate::model::MassBlock,
+    out: &mut [S],
+    kin: Kinematics<S>,
+) {
+    let k = block.dofs.len();
+    out.fill(S::zero());
+    let mut jacobian: [(Vector3<S>, Vector3<S>); 12] = [(Vector3::zeros(), Vector3::zeros()); 12];
+    for &i in &block.bodies {
+        let body = &model.bodies[i];
+        let com = kin.origin[i] + kin.rotation[i] * cast3::<S>(&body.com);
+        let inertia = kin.rotation[i] * cast33::<S>(&body.inertia) * kin.rotation[i].transpose();
+        let mass = S::constant(body.mass);
+        let chain = &body.chain;
+        let columns: Vec<(Vector3<S>, Vector3<S>)>;
+        let jac: &[(Vector3<S>, Vector3<S>)] = if chain.len() <= jacobian.len() {
+            for (slot, &dof) in jacobian.iter_mut().zip(chain) {
+                *slot = body_column(&kin, dof, &com);
+            }
+            &jacobian[..chain.len()]
+        } else {
+            columns = chain
+                .iter()
+                .map(|&dof| body_column(&kin, dof, &com))
+                .collect();
+            &columns
+        };
+        for (a, &row) in body.chain_local.iter().enumerate() {
+            let (va, wa) = jac[a];
+            let inertia_wa = inertia * wa;
+            for (b, &col) in body.chain_local.iter().enumerate().skip(a) {
+                let (vb, wb) = jac[b];
+                let entry = mass * va.dot(&vb) + wb.dot(&inertia_wa);
+                out[row * k + col] += entry;
+                if b != a {
+                    out[col * k + row] += entry;
+                }
+            }
+        }
+    }
+}
+
+/// Linear and angular velocity of a body's centre of mass per unit rate of `dof`.
+fn body_column<S: Scalar>(
+    kin: &Kinematics<S>,
+    dof: usize,
+    com: &Vector3<S>,
+) -> (Vector3<S>, Vector3<S>) {
+    let s = kin.dof_axis[dof];
+    if kin.dof_angular[dof] {
+        (s.cross(&(com - kin.dof_center[dof])), s)
+    } else {
+        (s, Vector3::zeros())
+    }
+}
+
+/// Solves `A x = b` in place for a small symmetric positive definite A
+/// (row-major, overwritten by its Cholesky factor); false if A is not positive definite.
+fn cholesky_solve<S: Scalar>(a: &mut [S], b: &mut [S]) -> bool {
+    let n = b.len();
+    for j in 0..n {
+        let mut diagonal = a[j * n + j];
+        for p in 0..j {
+            diagonal -= a[j * n + p] * a[j * n + p];
+        }
+        if diagonal.value() <= 0.0 || !diagonal.value().is_finite() {
+            return false;
+        }
+        let diagonal = diagonal.sqrt();
+        a[j * n + j] = diagonal;
+        for i in j + 1..n {
+            let mut value = a[i * n + j];
+            for p in 0..j {
+                value -= a[i * n + p] * a[j * n + p];
+            }
+            a[i * n + j] = value / diagonal;
+        }
+    }
+    for i in 0..n {
+        let mut value = b[i];
+        for p in 0..i {
+            value -= a[i * n + p] * b[p];
+        }
+        b[i] = value / a[i * n + i];
+    }
+    for i in (0..n).rev() {
+        let mut value = b[i];
+        for p in i + 1..n {
+            value -= a[p * n + i] * b[p];
+        }
+        b[i] = value / a[i * n + i];
+    }
+    true
 }
 
 /// Joint-space mass matrix from body Jacobians: `sum m Jv^T Jv + Jw^T I Jw`.

@@ -7,7 +7,9 @@
 
 pub mod assembly;
 pub mod dynamics;
+pub mod equilibrium;
 pub mod error;
+pub mod linearize;
 pub mod lugre;
 pub mod model;
 pub mod reference;
@@ -18,7 +20,9 @@ mod translational;
 
 pub use assembly::{Loaded, assemble, load};
 pub use dynamics::{ElementValues, InputValues, Workspace};
+pub use equilibrium::{EquilibriumError, EquilibriumKind};
 pub use error::LoadError;
+pub use linearize::Tangent;
 pub use lugre::{InvalidLugreParameter, LugreParams};
 pub use model::{
     Body, Controller, Frame, FrictionContact, Inputs, Isolator, Joint, JointMotion, Model,
@@ -27,4 +31,4 @@ pub use model::{
 pub use reference::{Reference, ReferenceSample};
 pub use robot::{FISTAGE_NS, RobotSpec};
 pub use scalar::{Dual64, Scalar};
-pub use scenario::{ControllerSettings, Override, Scenario, SolverSettings};
+pub use scenario::{ControllerSettings, Override, Scenario, SolverSettings, Start};

@@ -93,6 +93,23 @@ pub struct Body {
     pub inertia: Matrix3<f64>,
     /// Velocity indices of every joint between the world and this body.
     pub chain: Vec<usize>,
+    /// The mass block (subtree of one root body) this body belongs to.
+    pub block: usize,
+    /// Positions of `chain` within that block.
+    pub chain_local: Vec<usize>,
+}
+
+/// The joint-space mass matrix is block diagonal: one block per subtree hanging
+/// from the world. Each block is factored on its own, and blocks without
+/// rotating joints are constant and kept inverted.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MassBlock {
+    /// Velocity indices of the block, ascending.
+    pub dofs: Vec<usize>,
+    /// Bodies of the subtree.
+    pub bodies: Vec<usize>,
+    /// Row-major inverse when the block does not depend on the configuration.
+    pub constant_inverse: Option<Vec<f64>>,
 }
 
 /// A linear six-axis bushing (friction isolator).
@@ -134,6 +151,8 @@ pub struct FrictionContact {
     pub lugre: LugreParams,
     /// Index of the bristle state z in the state vector.
     pub z_index: usize,
+    /// `point . axis` in the zero configuration (for contact displacements).
+    pub zero_offset: f64,
 }
 
 /// A point on a body and a world-fixed direction: actuators (force along the
@@ -309,6 +328,8 @@ pub struct Model {
     pub(crate) constant_mass_inverse: Option<nalgebra::DMatrix<f64>>,
     /// True when no joint rotates a body: angular velocities stay zero.
     pub(crate) translational: bool,
+    /// Diagonal blocks of the mass matrix.
+    pub(crate) mass_blocks: Vec<MassBlock>,
     /// Constant Jacobians of a translational model.
     pub(crate) translational_map: Option<crate::translational::TranslationalMap>,
 }

@@ -32,6 +32,16 @@ pub enum Reference {
         /// Position after the step, m.
         value: f64,
     },
+    /// x_r = initial before `start`, then initial + velocity (t - start): a
+    /// constant-velocity traverse.
+    Ramp {
+        /// Start time, s.
+        start: f64,
+        /// Position before the start, m.
+        initial: f64,
+        /// Traverse velocity, m/s.
+        velocity: f64,
+    },
     /// x_r = offset + amplitude sin(2 pi frequency t + phase).
     Sine {
         /// Amplitude, m.
@@ -88,6 +98,23 @@ impl Reference {
                 position: if t < time { initial } else { value },
                 velocity: 0.0,
             },
+            Self::Ramp {
+                start,
+                initial,
+                velocity,
+            } => {
+                if t < start {
+                    ReferenceSample {
+                        position: initial,
+                        velocity: 0.0,
+                    }
+                } else {
+                    ReferenceSample {
+                        position: initial + velocity * (t - start),
+                        velocity,
+                    }
+                }
+            }
             Self::Sine {
                 amplitude,
                 frequency_hz,
@@ -122,10 +149,20 @@ impl Reference {
         }
     }
 
+    /// The velocity the reference settles to (a ramp's slope; 0 otherwise):
+    /// the stage's steady traverse velocity.
+    pub fn traverse_velocity(&self) -> f64 {
+        match *self {
+            Self::Ramp { velocity, .. } => velocity,
+            _ => 0.0,
+        }
+    }
+
     /// Times at which the reference or its velocity jumps.
     pub fn breakpoints(&self) -> Vec<f64> {
         match *self {
             Self::Step { time, .. } => vec![time],
+            Self::Ramp { start, .. } => vec![start],
             Self::PointToPoint {
                 start, duration, ..
             } => vec![start, start + duration],

@@ -146,9 +146,9 @@ pub struct RobotSpec {
 impl RobotSpec {
     /// Reads and checks a robot file.
     pub fn from_file(path: &Path) -> Result<Self, LoadError> {
-        let text = std::fs::read_to_string(path).map_err(|source| LoadError::Io {
+        let text = std::fs::read_to_string(path).map_err(|reason| LoadError::Io {
             file: path.to_path_buf(),
-            source,
+            reason,
         })?;
         Self::from_str(&text, path)
     }

@@ -18,7 +18,7 @@
 //! k_i = 0.0                                   # N/(m s)
 //!
 //! [reference]
-//! kind = "sine"                               # constant | step | sine | p2p | csv
+//! kind = "sine"                               # constant | step | ramp | sine | p2p | csv
 //! amplitude = 1e-3
 //! frequency = 0.1
 //!
@@ -53,6 +53,8 @@ struct ScenarioFile {
     overrides: BTreeMap<String, BTreeMap<String, toml::Value>>,
     #[serde(default)]
     initial: BTreeMap<String, f64>,
+    #[serde(default)]
+    start: Start,
     #[serde(default)]
     solver: SolverSettings,
     #[serde(default)]
@@ -103,6 +105,13 @@ enum ReferenceFile {
         #[serde(default)]
         initial: f64,
         value: f64,
+    },
+    Ramp {
+        #[serde(default)]
+        start: f64,
+        #[serde(default)]
+        initial: f64,
+        velocity: f64,
     },
     Sine {
         amplitude: f64,
@@ -202,6 +211,19 @@ struct StatisticsFile {
     window: Option<[f64; 2]>,
 }
 
+/// Where a run starts (before the `[initial]` entries are applied).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Start {
+    /// The zero configuration, at rest, bristles relaxed.
+    #[default]
+    Zero,
+    /// The static (sticking) equilibrium: gravity sag and preloads settled, at rest.
+    Static,
+    /// The slipping equilibrium at the platform velocity.
+    Slipping,
+}
+
 /// A per-element parameter override: `[overrides.<target>] <key> = <value>`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Override {
@@ -234,8 +256,10 @@ pub struct Scenario {
     pub reference: Reference,
     /// Overrides in file order (sorted by target, then key).
     pub overrides: Vec<Override>,
-    /// Initial state entries by state name (others start at zero).
+    /// Initial state entries by state name, applied on top of `start`.
     pub initial: BTreeMap<String, f64>,
+    /// Where the run starts.
+    pub start: Start,
     /// Solver settings.
     pub solver: SolverSettings,
     /// Output sample rate, Hz.
@@ -251,9 +275,9 @@ pub struct Scenario {
 impl Scenario {
     /// Reads and checks a scenario file (not the robot it names).
     pub fn from_file(path: &Path) -> Result<Self, LoadError> {
-        let text = std::fs::read_to_string(path).map_err(|source| LoadError::Io {
+        let text = std::fs::read_to_string(path).map_err(|reason| LoadError::Io {
             file: path.to_path_buf(),
-            source,
+            reason,
         })?;
         Self::from_str(&text, path)
     }
@@ -319,6 +343,7 @@ impl Scenario {
             reference,
             overrides,
             initial: raw.initial,
+            start: raw.start,
             solver: raw.solver,
             sample_rate,
             signals: raw.output.signals,
@@ -389,6 +414,20 @@ impl Checker<'_> {
                     time,
                     initial,
                     value,
+                }
+            }
+            ReferenceFile::Ramp {
+                start,
+                initial,
+                velocity,
+            } => {
+                self.non_negative("reference.start", start)?;
+                self.finite("reference.initial", initial)?;
+                self.finite("reference.velocity", velocity)?;
+                Reference::Ramp {
+                    start,
+                    initial,
+                    velocity,
                 }
             }
             ReferenceFile::Sine {

@@ -1,10 +1,12 @@
 //! One scenario run from a loaded study: initial state, engine choice,
 //! integration, output signals and steady-state statistics.
 
-use fistage_model::{LoadError, Loaded, Model, Scenario};
+use fistage_model::{EquilibriumKind, LoadError, Loaded, Model, Scenario, Start};
 use thiserror::Error;
 
-use crate::engine::{ENGINE_NAMES, ScenarioExcitation, SimError, SimSettings, engine_by_name};
+use crate::engine::{
+    ENGINE_NAMES, Excitation, ScenarioExcitation, SimError, SimSettings, engine_by_name,
+};
 use crate::metrics::{SignalSummary, summarize};
 use crate::trajectory::{SignalTable, Trajectory};
 
@@ -35,9 +37,20 @@ pub struct RunOutput {
     pub summary: Vec<SignalSummary>,
 }
 
-/// The zero state with the scenario's `[initial]` entries applied.
+/// The scenario's starting state (`start`), with its `[initial]` entries applied.
 pub fn initial_state(model: &Model, scenario: &Scenario) -> Result<Vec<f64>, LoadError> {
     let mut x = model.zero_state();
+    let kind = match scenario.start {
+        Start::Zero => None,
+        Start::Static => Some(EquilibriumKind::Sticking),
+        Start::Slipping => Some(EquilibriumKind::Slipping),
+    };
+    if let Some(kind) = kind {
+        let inputs = ScenarioExcitation::from_scenario(scenario).inputs(0.0);
+        x = model
+            .equilibrium(kind, &inputs, &x)
+            .map_err(|e| scenario.error("start", e.to_string()))?;
+    }
     for (name, value) in &scenario.initial {
         let index = model.layout.index(name).ok_or_else(|| {
             scenario.error(

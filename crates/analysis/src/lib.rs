@@ -1,0 +1,12 @@
+//! fistage-analysis: what a model does near its equilibria. Equilibria come
+//! from [`fistage_model::Model::equilibrium`]; this crate linearises there
+//! (exact Jacobian in tangent coordinates), computes every eigenvalue with its
+//! frequency and damping ratio, the mode shapes in named coordinates, and how
+//! each mode's kinetic energy is shared between the table's six motions and
+//! the bearings.
+
+pub mod eigen;
+pub mod modes;
+
+pub use eigen::{EigenPair, eigen_decomposition};
+pub use modes::{AnalysisError, ModalAnalysis, Mode, Participation, modal_analysis};

@@ -1,0 +1,227 @@
+//! Modal analysis at an equilibrium: linearise in tangent coordinates, take all
+//! eigenpairs, and describe each mode by its frequency, damping ratio, shape in
+//! named coordinates and kinetic-energy participation.
+
+use fistage_model::{EquilibriumError, EquilibriumKind, Inputs, JointMotion, Model};
+use nalgebra::{Complex, DMatrix};
+use serde::Serialize;
+use thiserror::Error;
+
+use crate::eigen::eigen_decomposition;
+
+/// Why a modal analysis failed.
+#[derive(Debug, Error)]
+pub enum AnalysisError {
+    /// No equilibrium was found.
+    #[error(transparent)]
+    Equilibrium(#[from] EquilibriumError),
+}
+
+/// Kinetic-energy share of one coordinate in a mode.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Participation {
+    /// Coordinate name: `table.x` .. `table.yaw`, or a body on a prismatic or revolute joint.
+    pub coordinate: String,
+    /// Share of the mode's kinetic energy (diagonal of the mass matrix), 0 to 1.
+    pub share: f64,
+    /// Shape entry: magnitude relative to the largest position entry.
+    pub magnitude: f64,
+    /// Shape entry: phase relative to the largest position entry, degrees.
+    pub phase_deg: f64,
+}
+
+/// One eigenvalue (one of each complex-conjugate pair) and what moves in it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Mode {
+    /// Real part of the eigenvalue, 1/s.
+    pub real: f64,
+    /// Imaginary part (>= 0), rad/s.
+    pub imag: f64,
+    /// Undamped natural frequency |lambda| / 2 pi, Hz.
+    pub frequency_hz: f64,
+    /// Damped frequency Im(lambda) / 2 pi, Hz (0 for a real eigenvalue).
+    pub damped_frequency_hz: f64,
+    /// Damping ratio -Re(lambda) / |lambda| (1 for a decaying real eigenvalue, < 0 unstable).
+    pub damping_ratio: f64,
+    /// Whether the eigenvalue is complex.
+    pub oscillatory: bool,
+    /// Kinetic-energy participation per position coordinate.
+    pub participation: Vec<Participation>,
+    /// Share of the eigenvector (scaled by nominal state sizes) in the bristle states.
+    pub bristle_share: f64,
+    /// Coordinate with the largest kinetic-energy share.
+    pub dominant: String,
+    /// Relative eigen-residual (accuracy check).
+    pub residual: f64,
+}
+
+impl Mode {
+    /// Kinetic-energy share of a named coordinate.
+    pub fn share(&self, coordinate: &str) -> f64 {
+        self.participation
+            .iter()
+            .find(|p| p.coordinate == coordinate)
+            .map_or(0.0, |p| p.share)
+    }
+}
+
+/// Everything the linearisation at one equilibrium says.
+#[derive(Debug, Clone, Serialize)]
+pub struct ModalAnalysis {
+    /// `sticking` or `slipping`.
+    pub equilibrium: String,
+    /// The equilibrium state (full coordinates, in the model's state order).
+    pub state: Vec<f64>,
+    /// Position coordinate names, in shape order.
+    pub coordinates: Vec<String>,
+    /// Modes sorted by natural frequency.
+    pub modes: Vec<Mode>,
+    /// Largest real part of the eigenvalues that are not neutral, 1/s.
+    pub max_real_part: f64,
+    /// Number of neutral (zero) eigenvalues: |lambda| below 1e-8 of the
+    /// Jacobian's norm. A stuck contact has one each, since its bristle
+    /// deflection and its position then move together.
+    pub neutral: usize,
+    /// Every eigenvalue that is not neutral lies in the open left half plane.
+    pub stable: bool,
+    /// The tangent-coordinate Jacobian.
+    #[serde(skip)]
+    pub jacobian: DMatrix<f64>,
+}
+
+/// Readable names of the position coordinates in tangent order: floating
+/// joints as `<body>.x .y .z .roll .pitch .yaw`, others by body name.
+pub fn coordinate_names(model: &Model) -> Vec<String> {
+    let mut names = vec![String::new(); model.layout.nv];
+    for body in &model.bodies {
+        let v0 = body.joint.v_offset;
+        match body.joint.motion {
+            JointMotion::Floating => {
+                for (k, axis) in ["x", "y", "z", "roll", "pitch", "yaw"].iter().enumerate() {
+                    names[v0 + k] = format!("{}.{axis}", body.name);
+                }
+            }
+            _ => names[v0] = body.name.clone(),
+        }
+    }
+    names
+}
+
+/// Linearises at the equilibrium of the given kind and describes every mode.
+pub fn modal_analysis(
+    model: &Model,
+    inputs: &Inputs,
+    kind: EquilibriumKind,
+    start: &[f64],
+) -> Result<ModalAnalysis, AnalysisError> {
+    let mut inputs = *inputs;
+    if kind == EquilibriumKind::Sticking {
+        inputs.platform_velocity = 0.0;
+    }
+    let state = model.equilibrium(kind, &inputs, start)?;
+    let (jacobian, tangent) = model.tangent_jacobian(&state, &inputs);
+    let np = tangent.n_positions;
+    let mass = fistage_model::dynamics::mass_matrix(model, &state);
+    let coordinates = coordinate_names(model);
+    let nominal: Vec<f64> = tangent
+        .names
+        .iter()
+        .map(|n| {
+            model
+                .layout
+                .index(n)
+                .map_or(1e-3, |i| model.layout.nominal[i])
+        })
+        .collect();
+    let is_bristle: Vec<bool> = tangent
+        .kinds
+        .iter()
+        .map(|k| *k == fistage_model::StateKind::Bristle)
+        .collect();
+    let mut modes = Vec::new();
+    for mut pair in eigen_decomposition(&jacobian) {
+        // Repeated real roots can come out of the Schur form as a pair with
+        // imaginary parts at round-off level: they are two real eigenvalues.
+        if pair.value.im.abs() <= 1e-9 * pair.value.norm().max(1.0) {
+            pair.value.im = 0.0;
+        }
+        if pair.value.im < 0.0 {
+            continue;
+        }
+        let velocity: Vec<Complex<f64>> = (0..np).map(|i| pair.vector[np + i]).collect();
+        let energy: Vec<f64> = (0..np)
+            .map(|i| mass[(i, i)] * velocity[i].norm_sqr())
+            .collect();
+        let total: f64 = energy.iter().sum::<f64>().max(f64::MIN_POSITIVE);
+        let reference = (0..np)
+            .max_by(|&a, &b| pair.vector[a].norm().total_cmp(&pair.vector[b].norm()))
+            .map(|i| pair.vector[i])
+            .unwrap_or(Complex::new(1.0, 0.0));
+        let participation: Vec<Participation> = (0..np)
+            .map(|i| {
+                let relative = if reference.norm() > 0.0 {
+                    pair.vector[i] / reference
+                } else {
+                    Complex::new(0.0, 0.0)
+                };
+                Participation {
+                    coordinate: coordinates[i].clone(),
+                    share: energy[i] / total,
+                    magnitude: relative.norm(),
+                    phase_deg: relative.arg().to_degrees(),
+                }
+            })
+            .collect();
+        let scaled_norm = |select: &dyn Fn(usize) -> bool| -> f64 {
+            (0..pair.vector.len())
+                .filter(|&i| select(i))
+                .map(|i| (pair.vector[i].norm() / nominal[i]).powi(2))
+                .sum::<f64>()
+        };
+        let all = scaled_norm(&|_| true).max(f64::MIN_POSITIVE);
+        let bristle_share = scaled_norm(&|i| is_bristle[i]) / all;
+        let dominant = participation
+            .iter()
+            .max_by(|a, b| a.share.total_cmp(&b.share))
+            .map(|p| p.coordinate.clone())
+            .unwrap_or_default();
+        let magnitude = pair.value.norm();
+        modes.push(Mode {
+            real: pair.value.re,
+            imag: pair.value.im,
+            frequency_hz: magnitude / (2.0 * std::f64::consts::PI),
+            damped_frequency_hz: pair.value.im / (2.0 * std::f64::consts::PI),
+            damping_ratio: if magnitude > 0.0 {
+                -pair.value.re / magnitude
+            } else {
+                0.0
+            },
+            oscillatory: pair.value.im > 1e-9 * magnitude.max(1.0),
+            participation,
+            bristle_share,
+            dominant,
+            residual: pair.residual,
+        });
+    }
+    let scale = jacobian.norm().max(1.0);
+    let is_neutral = |m: &Mode| (m.real * m.real + m.imag * m.imag).sqrt() < 1e-8 * scale;
+    let neutral = modes.iter().filter(|m| is_neutral(m)).count();
+    let max_real_part = modes
+        .iter()
+        .filter(|m| !is_neutral(m))
+        .map(|m| m.real)
+        .fold(f64::NEG_INFINITY, f64::max);
+    Ok(ModalAnalysis {
+        equilibrium: match kind {
+            EquilibriumKind::Sticking => "sticking".into(),
+            EquilibriumKind::Slipping => "slipping".into(),
+        },
+        state,
+        coordinates,
+        modes,
+        max_real_part,
+        neutral,
+        stable: max_real_part < 0.0,
+        jacobian,
+    })
+}

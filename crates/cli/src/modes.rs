@@ -1,0 +1,354 @@
+//! `fistage modes SCENARIO`: equilibria, eigenvalues, mode shapes and their
+//! coupling, as a table, `modes.json`, and top-view pictures of the dominant
+//! mode shapes.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use fistage_analysis::{ModalAnalysis, Mode, modal_analysis};
+use fistage_model::{EquilibriumKind, Frame, JointMotion, Loaded};
+use fistage_plot::{Series, XyPlot, write_xy};
+use fistage_sim::{Excitation, ScenarioExcitation, initial_state};
+use nalgebra::Vector3;
+
+/// Which equilibria to analyse.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Which {
+    /// Contacts stuck (pre-motion).
+    Sticking,
+    /// Contacts sliding at the platform (or traverse) velocity.
+    Slipping,
+    /// Both.
+    Both,
+}
+
+/// Arguments of `fistage modes`.
+#[derive(clap::Args)]
+pub struct ModesArgs {
+    /// Scenario file (TOML).
+    pub scenario: PathBuf,
+    /// Equilibria to analyse.
+    #[arg(long, value_enum, default_value_t = Which::Both)]
+    pub equilibrium: Which,
+    /// Output folder for modes.json and the mode-shape pictures (default: out/<scenario>-modes).
+    #[arg(long, short)]
+    pub out: Option<PathBuf>,
+    /// Print JSON instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// How many dominant mode shapes to draw per equilibrium.
+    #[arg(long, default_value_t = 4)]
+    pub shapes: usize,
+}
+
+/// Runs the command.
+pub fn run(args: &ModesArgs) -> anyhow::Result<()> {
+    let loaded = fistage_model::load(&args.scenario)?;
+    let scenario = &loaded.scenario;
+    let mut inputs = ScenarioExcitation::from_scenario(scenario).inputs(0.0);
+    // A traverse at velocity V over a still counter-surface is, for the
+    // friction, the stage at rest over a surface sliding at -V.
+    inputs.platform_velocity = scenario.platform_velocity - scenario.reference.traverse_velocity();
+    inputs.reference = Default::default();
+    let start = initial_state(&loaded.model, scenario)?;
+    let kinds: Vec<EquilibriumKind> = match args.equilibrium {
+        Which::Sticking => vec![EquilibriumKind::Sticking],
+        Which::Slipping => vec![EquilibriumKind::Slipping],
+        Which::Both => vec![EquilibriumKind::Sticking, EquilibriumKind::Slipping],
+    };
+    let mut analyses = Vec::new();
+    for kind in kinds {
+        let analysis = modal_analysis(&loaded.model, &inputs, kind, &start)
+            .with_context(|| format!("{}: modal analysis", args.scenario.display()))?;
+        analyses.push(analysis);
+    }
+    let out_dir = args.out.clone().unwrap_or_else(|| {
+        let stem = args
+            .scenario
+            .file_stem()
+            .map_or("modes".into(), |s| s.to_string_lossy().into_owned());
+        PathBuf::from("out").join(format!("{stem}-modes"))
+    });
+    std::fs::create_dir_all(&out_dir)
+        .with_context(|| format!("cannot create {}", out_dir.display()))?;
+    let json = serde_json::json!({
+        "scenario": scenario.file.display().to_string(),
+        "slip_velocity_m_per_s": -inputs.platform_velocity,
+        "analyses": analyses,
+    });
+    let text = serde_json::to_string_pretty(&json)?;
+    std::fs::write(out_dir.join("modes.json"), text.clone() + "\n")
+        .with_context(|| format!("cannot write {}", out_dir.join("modes.json").display()))?;
+    let mut pictures = Vec::new();
+    for analysis in &analyses {
+        pictures.extend(draw_dominant_shapes(
+            &loaded,
+            analysis,
+            args.shapes,
+            &out_dir,
+        )?);
+    }
+    if args.json {
+        println!("{text}");
+    } else {
+        for analysis in &analyses {
+            print_table(analysis);
+        }
+        println!(
+            "wrote modes.json and {} pictures in {}",
+            pictures.len(),
+            out_dir.display()
+        );
+    }
+    Ok(())
+}
+
+/// Sum of the shares of coordinates whose name starts with one of the prefixes.
+fn share_of(mode: &Mode, select: impl Fn(&str) -> bool) -> f64 {
+    mode.participation
+        .iter()
+        .filter(|p| select(&p.coordinate))
+        .map(|p| p.share)
+        .sum()
+}
+
+fn print_table(analysis: &ModalAnalysis) {
+    println!(
+        "{} equilibrium: {} (largest real part {:.4e} 1/s, {} neutral)",
+        analysis.equilibrium,
+        if analysis.stable {
+            "stable"
+        } else {
+            "UNSTABLE"
+        },
+        analysis.max_real_part,
+        analysis.neutral
+    );
+    let floating: Vec<&str> = analysis
+        .coordinates
+        .iter()
+        .filter_map(|c| c.strip_suffix(".x"))
+        .collect();
+    let table = floating.first().copied().unwrap_or("");
+    println!(
+        "{:>3} {:>11} {:>9} {:>12} {:>12}  {:>6} {:>6} {:>6} {:>6} {:>8} {:>7}  dominant",
+        "#",
+        "f_n [Hz]",
+        "zeta",
+        "Re [1/s]",
+        "Im [rad/s]",
+        "x",
+        "y+z",
+        "r+p",
+        "yaw",
+        "bearings",
+        "bristle"
+    );
+    for (k, mode) in analysis.modes.iter().enumerate() {
+        let is = |c: &str, axis: &str| c == format!("{table}.{axis}");
+        println!(
+            "{:>3} {:>11.3} {:>9.4} {:>12.4e} {:>12.4e}  {:>6.3} {:>6.3} {:>6.3} {:>6.3} {:>8.3} {:>7.3}  {}",
+            k + 1,
+            mode.frequency_hz,
+            mode.damping_ratio,
+            mode.real,
+            mode.imag,
+            share_of(mode, |c| is(c, "x")),
+            share_of(mode, |c| is(c, "y") || is(c, "z")),
+            share_of(mode, |c| is(c, "roll") || is(c, "pitch")),
+            share_of(mode, |c| is(c, "yaw")),
+            share_of(mode, |c| !c.starts_with(&format!("{table}."))),
+            mode.bristle_share,
+            mode.dominant
+        );
+    }
+    println!(
+        "(x, y+z, r+p, yaw, bearings: shares of the mode's kinetic energy; bristle: share of the scaled eigenvector)\n"
+    );
+}
+
+/// Modes worth drawing: unstable ones first, then oscillatory modes with
+/// mechanical content, lowest frequency first.
+fn dominant_modes(analysis: &ModalAnalysis, count: usize) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..analysis.modes.len())
+        .filter(|&k| analysis.modes[k].oscillatory && analysis.modes[k].bristle_share < 0.5)
+        .collect();
+    order.sort_by(|&a, &b| {
+        let (ma, mb) = (&analysis.modes[a], &analysis.modes[b]);
+        (mb.real > 0.0)
+            .cmp(&(ma.real > 0.0))
+            .then(ma.frequency_hz.total_cmp(&mb.frequency_hz))
+    });
+    order.truncate(count);
+    order
+}
+
+/// Points of each body seen from above: isolator attach points (and the body
+/// origin), in world coordinates at the equilibrium.
+fn body_points(loaded: &Loaded, state: &[f64]) -> Vec<Vec<Vector3<f64>>> {
+    let model = &loaded.model;
+    let poses = model.body_poses(state);
+    let mut points: Vec<Vec<Vector3<f64>>> =
+        poses.iter().map(|(_, origin)| vec![*origin]).collect();
+    for isolator in &model.isolators {
+        for (frame, local) in [
+            (isolator.parent, isolator.parent_attach.translation.vector),
+            (isolator.child, isolator.child_attach.translation.vector),
+        ] {
+            if let Frame::Body(b) = frame {
+                let (rotation, origin) = poses[b];
+                points[b].push(origin + rotation * local);
+            }
+        }
+    }
+    points
+}
+
+/// Planar displacement of a world point on body b for a mode shape (real part
+/// after phase alignment), from the body's joint coordinates.
+fn displacement(
+    loaded: &Loaded,
+    state: &[f64],
+    shape: &[f64],
+    index: usize,
+    point: &Vector3<f64>,
+) -> Vector3<f64> {
+    let model = &loaded.model;
+    let poses = model.body_poses(state);
+    let body = &model.bodies[index];
+    let v0 = body.joint.v_offset;
+    // Joint frame axes in the world (for root bodies the parent is the world).
+    let parent_rotation = body
+        .parent
+        .map_or(nalgebra::Matrix3::identity(), |p| poses[p].0);
+    let joint_rotation = parent_rotation * body.joint.origin_rotation;
+    let origin = poses[index].1;
+    match body.joint.motion {
+        JointMotion::Prismatic { axis } => joint_rotation * axis * shape[v0],
+        JointMotion::Revolute { axis } => {
+            (joint_rotation * axis * shape[v0]).cross(&(point - origin))
+        }
+        JointMotion::Floating => {
+            let translation =
+                joint_rotation * Vector3::new(shape[v0], shape[v0 + 1], shape[v0 + 2]);
+            let rotation =
+                joint_rotation * Vector3::new(shape[v0 + 3], shape[v0 + 4], shape[v0 + 5]);
+            translation + rotation.cross(&(point - origin))
+        }
+    }
+}
+
+fn draw_dominant_shapes(
+    loaded: &Loaded,
+    analysis: &ModalAnalysis,
+    count: usize,
+    out_dir: &Path,
+) -> anyhow::Result<Vec<String>> {
+    let points = body_points(loaded, &analysis.state);
+    let all: Vec<&Vector3<f64>> = points.iter().flatten().collect();
+    let span = all
+        .iter()
+        .flat_map(|a| {
+            all.iter()
+                .map(move |b| ((a.x - b.x).powi(2) + (a.y - b.y).powi(2)).sqrt())
+        })
+        .fold(0.0_f64, f64::max)
+        .max(1e-3);
+    let mut written = Vec::new();
+    for (rank, &k) in dominant_modes(analysis, count).iter().enumerate() {
+        let mode = &analysis.modes[k];
+        // Real shape: magnitude x cos(phase), scaled so the largest point moves 15% of the span.
+        let shape: Vec<f64> = mode
+            .participation
+            .iter()
+            .map(|p| p.magnitude * p.phase_deg.to_radians().cos())
+            .collect();
+        let mut moved: Vec<Vec<Vector3<f64>>> = Vec::new();
+        let mut largest = 0.0_f64;
+        for (b, body_points) in points.iter().enumerate() {
+            let d: Vec<Vector3<f64>> = body_points
+                .iter()
+                .map(|p| displacement(loaded, &analysis.state, &shape, b, p))
+                .collect();
+            largest = d.iter().map(|v| v.xy().norm()).fold(largest, f64::max);
+            moved.push(d);
+        }
+        let scale = if largest > 0.0 {
+            0.15 * span / largest
+        } else {
+            0.0
+        };
+        let mut series = Vec::new();
+        for (b, body) in loaded.model.bodies.iter().enumerate() {
+            let at_rest = &points[b];
+            let displaced: Vec<Vector3<f64>> = at_rest
+                .iter()
+                .zip(&moved[b])
+                .map(|(p, d)| p + d * scale)
+                .collect();
+            let outline = |pts: &[Vector3<f64>]| -> (Vec<f64>, Vec<f64>) {
+                // The attach points (after the body origin) outline the body.
+                let ring = convex_ring(if pts.len() > 3 { &pts[1..] } else { pts });
+                (
+                    ring.iter().map(|p| p.x * 1e3).collect(),
+                    ring.iter().map(|p| p.y * 1e3).collect(),
+                )
+            };
+            if matches!(body.joint.motion, JointMotion::Floating) {
+                let (x, y) = outline(at_rest);
+                series.push(Series::line(format!("{} at rest", body.name), x, y));
+                let (x, y) = outline(&displaced);
+                series.push(Series::line(format!("{} in mode", body.name), x, y));
+            } else {
+                let last = at_rest.len() - 1;
+                series.push(Series::line_and_markers(
+                    body.name.clone(),
+                    vec![at_rest[last].x * 1e3, displaced[last].x * 1e3],
+                    vec![at_rest[last].y * 1e3, displaced[last].y * 1e3],
+                ));
+            }
+        }
+        let mut plot = XyPlot::new(
+            format!(
+                "{} mode {}: {:.2} Hz, zeta {:.4}{}",
+                analysis.equilibrium,
+                k + 1,
+                mode.frequency_hz,
+                mode.damping_ratio,
+                if mode.real > 0.0 { ", UNSTABLE" } else { "" }
+            ),
+            "x [mm] (top view, motion exaggerated)",
+            "y [mm]",
+            series,
+        );
+        plot.equal_aspect = true;
+        for extension in ["svg", "png"] {
+            let name = format!("mode_{}_{}.{extension}", analysis.equilibrium, rank + 1);
+            write_xy(&plot, &out_dir.join(&name)).with_context(|| format!("cannot draw {name}"))?;
+            written.push(name);
+        }
+    }
+    Ok(written)
+}
+
+/// Points of a body's outline in angular order around their centroid, closed.
+fn convex_ring(points: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
+    if points.len() < 3 {
+        return points.to_vec();
+    }
+    let centre = points.iter().sum::<Vector3<f64>>() / points.len() as f64;
+    let mut ring: Vec<Vector3<f64>> = points
+        .iter()
+        .filter(|p| (p.xy() - centre.xy()).norm() > 1e-9)
+        .copied()
+        .collect();
+    ring.sort_by(|a, b| {
+        let angle = |p: &Vector3<f64>| (p.y - centre.y).atan2(p.x - centre.x);
+        angle(a).total_cmp(&angle(b))
+    });
+    ring.dedup_by(|a, b| (a.xy() - b.xy()).norm() < 1e-9);
+    if let Some(first) = ring.first().copied() {
+        ring.push(first);
+    }
+    ring
+}
