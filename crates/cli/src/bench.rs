@@ -1,7 +1,8 @@
 //! `fistage bench`: measured speed and accuracy, printed as the Markdown tables
-//! that BENCHMARKS.md quotes. Each case times only the integration (no output
-//! signals, no files), takes the median of several repeats, and measures the
-//! error against a run at a much tighter tolerance.
+//! that BENCHMARKS.md quotes. Engine cases time only the integration (no output
+//! signals, no files), take the median of several repeats, and measure the
+//! error against a run at a much tighter tolerance. Identification cases time
+//! whole fits on the standard synthetic data sets.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -15,11 +16,13 @@ use fistage_sim::{
 /// Arguments of `fistage bench`.
 #[derive(clap::Args)]
 pub struct BenchArgs {
-    /// Scenario to time (default: the paper's Fig. 5b stage with FI).
-    #[arg(long, default_value = "scenarios/paper/fig05b_fi.toml")]
-    pub scenario: PathBuf,
-    /// Relative tolerances to compare.
-    #[arg(long, value_delimiter = ',', default_values_t = vec![1e-6, 1e-8, 1e-10])]
+    /// Scenario to time (default: the standard suite, the paper's Fig. 5b
+    /// stage with FI and the four-bearing traverse, then the identification fits).
+    #[arg(long)]
+    pub scenario: Option<PathBuf>,
+    /// Relative tolerances to compare (default: 1e-6, 1e-8, 1e-10 for the
+    /// 1-DOF stage, 1e-6, 1e-8 for the 6-DOF traverse).
+    #[arg(long, value_delimiter = ',')]
     pub rtol: Vec<f64>,
     /// Tolerance of the reference run.
     #[arg(long, default_value_t = 1e-13)]
@@ -119,7 +122,97 @@ fn max_deviation(
 
 /// Runs the benchmark and prints Markdown.
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
-    let loaded = fistage_model::load(&args.scenario)?;
+    match &args.scenario {
+        Some(scenario) => {
+            let rtol = if args.rtol.is_empty() {
+                vec![1e-6, 1e-8, 1e-10]
+            } else {
+                args.rtol.clone()
+            };
+            engine_table(args, scenario, &rtol)
+        }
+        None => {
+            engine_table(
+                args,
+                &PathBuf::from("scenarios/paper/fig05b_fi.toml"),
+                &[1e-6, 1e-8, 1e-10],
+            )?;
+            println!();
+            engine_table(
+                args,
+                &PathBuf::from("scenarios/coupling/friction20_traverse.toml"),
+                &[1e-6, 1e-8],
+            )?;
+            println!();
+            ident_table(args.repeat)
+        }
+    }
+}
+
+/// Median time of `repeat` calls, after one warm-up call.
+fn median_time(repeat: usize, mut f: impl FnMut() -> anyhow::Result<()>) -> anyhow::Result<f64> {
+    f()?;
+    let mut times = Vec::with_capacity(repeat);
+    for _ in 0..repeat.max(1) {
+        let start = Instant::now();
+        f()?;
+        times.push(start.elapsed().as_secs_f64());
+    }
+    Ok(median(&mut times))
+}
+
+fn ident_table(repeat: usize) -> anyhow::Result<()> {
+    use fistage_ident::synth::{TABLE1_MASS, benchmark_frf_data, benchmark_stribeck_data};
+    use fistage_ident::{
+        FrfOptions, Loss, StribeckOptions, fit_frf, fit_stribeck, fit_stribeck_asymmetric,
+    };
+    let stribeck = benchmark_stribeck_data();
+    let frf = benchmark_frf_data();
+    println!(
+        "LuGre identification on the standard synthetic data (Table 1 with noise), median of {repeat} fits, release build\n"
+    );
+    println!("| fit | data | ms per fit |");
+    println!("|---|---|---|");
+    for loss in [Loss::L2, Loss::Huber, Loss::L1] {
+        let options = StribeckOptions {
+            loss,
+            ..StribeckOptions::default()
+        };
+        let t = median_time(
+            repeat,
+            || Ok(fit_stribeck(&stribeck, &options).map(|_| ())?),
+        )?;
+        println!(
+            "| Stribeck, {} | f_ss, {} points | {:.3} |",
+            loss.name(),
+            stribeck.len(),
+            t * 1e3
+        );
+    }
+    let t = median_time(repeat, || {
+        Ok(fit_stribeck_asymmetric(&stribeck, &StribeckOptions::default()).map(|_| ())?)
+    })?;
+    println!(
+        "| Stribeck, l2, asymmetric (3 fits + test) | f_ss, {} points | {:.3} |",
+        stribeck.len(),
+        t * 1e3
+    );
+    for (name, options) in [
+        ("known mass", FrfOptions::with_mass(TABLE1_MASS)),
+        ("fitted mass", FrfOptions::default()),
+    ] {
+        let t = median_time(repeat, || Ok(fit_frf(&frf, &options).map(|_| ())?))?;
+        println!(
+            "| FRF, complex, {name} | {} frequencies | {:.3} |",
+            frf.len(),
+            t * 1e3
+        );
+    }
+    Ok(())
+}
+
+fn engine_table(args: &BenchArgs, scenario: &PathBuf, rtols: &[f64]) -> anyhow::Result<()> {
+    let loaded = fistage_model::load(scenario)?;
     let engine = engine_by_name(&loaded.scenario.solver.engine)
         .with_context(|| format!("unknown engine {}", loaded.scenario.solver.engine))?;
     eprintln!("reference run at rtol {:e} ...", args.reference_rtol);
@@ -127,7 +220,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let simulated = loaded.scenario.duration;
     println!(
         "`{}` ({} s simulated, engine {}, median of {} runs, error of `{}` against rtol {:e}, release build)\n",
-        args.scenario.display(),
+        scenario.display(),
         simulated,
         engine.name(),
         args.repeat,
@@ -138,7 +231,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         "| rtol | wall ms | CPU ms | x real time | steps | rejected | RHS evals | max error (m) | relative error |"
     );
     println!("|---|---|---|---|---|---|---|---|---|");
-    for &rtol in &args.rtol {
+    for &rtol in rtols {
         let timing = time_run(&loaded, engine.as_ref(), rtol, args.repeat)?;
         let (error, relative) = max_deviation(
             &loaded,
