@@ -4,7 +4,7 @@
 //! error against a run at a much tighter tolerance. Identification cases time
 //! whole fits on the standard synthetic data sets.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Context;
@@ -211,7 +211,7 @@ fn ident_table(repeat: usize) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn engine_table(args: &BenchArgs, scenario: &PathBuf, rtols: &[f64]) -> anyhow::Result<()> {
+fn engine_table(args: &BenchArgs, scenario: &Path, rtols: &[f64]) -> anyhow::Result<()> {
     let loaded = fistage_model::load(scenario)?;
     let engine = engine_by_name(&loaded.scenario.solver.engine)
         .with_context(|| format!("unknown engine {}", loaded.scenario.solver.engine))?;
