@@ -3,10 +3,11 @@
 //! (exact Jacobian in tangent coordinates), computes every eigenvalue with its
 //! frequency and damping ratio, the mode shapes in named coordinates, and how
 //! each mode's kinetic energy is shared between the table's six motions and
-//! the bearings.
+//! the bearings; and sweeps of stability over one or two parameters.
 
 pub mod eigen;
 pub mod modes;
+pub mod sweep;
 
 pub use eigen::{EigenPair, eigen_decomposition};
 pub use modes::{AnalysisError, ModalAnalysis, Mode, Participation, modal_analysis};

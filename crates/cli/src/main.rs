@@ -7,6 +7,7 @@ mod identify;
 mod modes;
 mod progress;
 mod run;
+mod sweep;
 
 use clap::{Parser, Subcommand};
 
@@ -31,6 +32,8 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Equilibria, eigenvalues and mode shapes (table, modes.json, top-view pictures).
     Modes(modes::ModesArgs),
+    /// Stability over a grid of one or two parameters (points.csv, points.json, map).
+    Sweep(sweep::SweepArgs),
     /// Identify LuGre parameters from measured stage data.
     Identify(identify::IdentifyArgs),
 }
@@ -43,5 +46,6 @@ fn main() -> anyhow::Result<()> {
         Command::Bench(args) => bench::run(&args),
         Command::Check(args) => check::run(&args),
         Command::Modes(args) => modes::run(&args),
+        Command::Sweep(args) => sweep::run(&args),
     }
 }

@@ -1,0 +1,548 @@
+//! Parameter sweeps: a grid over one or two scalar parameters of a scenario,
+//! and at every point the linear verdict (eigenvalues at the slipping
+//! equilibrium), the simulated verdict (persistent oscillation of the sensor
+//! signal from rest), the oscillation amplitude, and bistability (a stable
+//! equilibrium beside a limit cycle). Points run in parallel; any subset of
+//! the grid (a shard, or the points a killed run did not finish) can be
+//! computed on its own, and results are exact functions of the point, so
+//! shards merge into the same table as a single run.
+//!
+//! ```toml
+//! [sweep]
+//! analysis = "both"                 # linear | simulation | both
+//! duration = 3.0                    # s per simulated point (default: the scenario's)
+//! oscillation_threshold = 1e-9      # m, steady peak-to-peak above which a run oscillates
+//! [[sweep.axis]]
+//! parameter = "controller.k"        # controller.k, controller.c, controller.k_i,
+//! from = 1e4                        # platform.velocity, alpha, beta,
+//! to = 1e6                          # overrides.<element>.<key>
+//! points = 40
+//! spacing = "log"                   # lin | log
+//! ```
+//!
+//! `alpha` scales every isolator's stiffness and damping along its compliant
+//! (x) axis, `beta` the mass (and inertia) of every link that carries a
+//! friction contact: the paper's kappa_1 = alpha kappa_1, eta_1 = alpha eta_1
+//! and rho = beta rho (Fig. 9). Both scale the robot file's values.
+
+use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use fistage_model::{EquilibriumKind, LoadError, Loaded, Override, RobotSpec, Scenario, assemble};
+use fistage_sim::{
+    Engine, Excitation, NativeEngine, ScenarioExcitation, SimSettings, initial_state,
+};
+use rayon::prelude::*;
+use serde::Deserialize;
+
+use crate::modes::modal_analysis;
+
+/// Grid spacing along an axis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Spacing {
+    /// Evenly spaced values.
+    #[serde(alias = "linear")]
+    Lin,
+    /// Evenly spaced logarithms.
+    #[serde(alias = "logarithmic")]
+    Log,
+}
+
+/// One sweep axis.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Axis {
+    /// Parameter path.
+    pub parameter: String,
+    /// First value.
+    pub from: f64,
+    /// Last value.
+    pub to: f64,
+    /// Number of values (>= 1).
+    pub points: usize,
+    /// Spacing.
+    #[serde(default = "linear")]
+    pub spacing: Spacing,
+}
+
+fn linear() -> Spacing {
+    Spacing::Lin
+}
+
+impl Axis {
+    /// The axis values, first to last.
+    pub fn values(&self) -> Vec<f64> {
+        let n = self.points;
+        if n == 1 {
+            return vec![self.from];
+        }
+        (0..n)
+            .map(|i| {
+                let t = i as f64 / (n - 1) as f64;
+                match self.spacing {
+                    Spacing::Lin => self.from + (self.to - self.from) * t,
+                    Spacing::Log => (self.from.ln() + (self.to.ln() - self.from.ln()) * t).exp(),
+                }
+            })
+            .collect()
+    }
+}
+
+/// Which analyses a sweep runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Analyses {
+    /// Eigenvalues at the slipping equilibrium.
+    Linear,
+    /// Simulation from rest.
+    Simulation,
+    /// Both, and bistability.
+    Both,
+}
+
+impl Analyses {
+    fn linear(self) -> bool {
+        self != Self::Simulation
+    }
+    fn simulation(self) -> bool {
+        self != Self::Linear
+    }
+}
+
+/// A checked `[sweep]` table.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepSpec {
+    /// One or two axes; the first varies fastest in the grid order.
+    #[serde(rename = "axis")]
+    pub axes: Vec<Axis>,
+    /// Analyses to run.
+    #[serde(default = "both")]
+    pub analysis: Analyses,
+    /// Simulated time per point, s (default: the scenario's duration).
+    pub duration: Option<f64>,
+    /// Steady peak-to-peak of the sensor above which a run oscillates, m.
+    #[serde(default = "default_threshold")]
+    pub oscillation_threshold: f64,
+}
+
+fn both() -> Analyses {
+    Analyses::Both
+}
+
+fn default_threshold() -> f64 {
+    1e-9
+}
+
+/// Parameter paths every model accepts, besides `overrides.<element>.<key>`.
+pub const PARAMETERS: [&str; 6] = [
+    "controller.k",
+    "controller.c",
+    "controller.k_i",
+    "platform.velocity",
+    "alpha",
+    "beta",
+];
+
+impl SweepSpec {
+    /// Reads the scenario's `[sweep]` table.
+    pub fn from_scenario(scenario: &Scenario) -> Result<Self, LoadError> {
+        let raw = scenario
+            .sweep
+            .clone()
+            .ok_or_else(|| scenario.error("sweep", "the scenario has no [sweep] table"))?;
+        let spec: SweepSpec = raw.try_into().map_err(|e: toml::de::Error| {
+            scenario.error("sweep", e.to_string().trim().to_string())
+        })?;
+        if spec.axes.is_empty() || spec.axes.len() > 2 {
+            return Err(scenario.error(
+                "sweep.axis",
+                format!("needs one or two axes, got {}", spec.axes.len()),
+            ));
+        }
+        for (k, axis) in spec.axes.iter().enumerate() {
+            let key = format!("sweep.axis[{k}]");
+            if axis.points == 0 {
+                return Err(scenario.error(&key, "points must be >= 1"));
+            }
+            if !axis.from.is_finite() || !axis.to.is_finite() {
+                return Err(scenario.error(&key, "from and to must be finite"));
+            }
+            if axis.spacing == Spacing::Log && (axis.from <= 0.0 || axis.to <= 0.0) {
+                return Err(scenario.error(&key, "log spacing needs from > 0 and to > 0"));
+            }
+            if !PARAMETERS.contains(&axis.parameter.as_str())
+                && !axis.parameter.starts_with("overrides.")
+            {
+                return Err(scenario.error(
+                    format!("{key}.parameter"),
+                    format!(
+                        "unknown parameter \"{}\" (use {} or overrides.<element>.<key>)",
+                        axis.parameter,
+                        PARAMETERS.join(", ")
+                    ),
+                ));
+            }
+        }
+        if let Some(d) = spec.duration
+            && !(d.is_finite() && d > 0.0)
+        {
+            return Err(scenario.error("sweep.duration", format!("must be > 0, got {d}")));
+        }
+        Ok(spec)
+    }
+
+    /// Number of grid points.
+    pub fn len(&self) -> usize {
+        self.axes.iter().map(|a| a.points).product()
+    }
+
+    /// Whether the grid is empty.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Parameter values of grid point `index` (first axis fastest).
+    pub fn point(&self, index: usize) -> Vec<f64> {
+        let mut rest = index;
+        self.axes
+            .iter()
+            .map(|axis| {
+                let value = axis.values()[rest % axis.points];
+                rest /= axis.points;
+                value
+            })
+            .collect()
+    }
+}
+
+/// What one grid point gave.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointResult {
+    /// Grid index.
+    pub index: usize,
+    /// Parameter values, one per axis.
+    pub parameters: Vec<f64>,
+    /// Slipping equilibrium linearly stable.
+    pub stable_linear: Option<bool>,
+    /// No persistent oscillation in simulation from rest.
+    pub stable_sim: Option<bool>,
+    /// Steady peak-to-peak of the sensor signal, m.
+    pub amplitude: Option<f64>,
+    /// Largest real part of the non-neutral eigenvalues, 1/s.
+    pub max_real_eig: Option<f64>,
+    /// Stable equilibrium beside a limit cycle (linear stable, simulation oscillates).
+    pub bistable: Option<bool>,
+}
+
+/// Applies one sweep parameter to a scenario and its (unmodified) robot.
+pub fn apply_parameter(
+    scenario: &mut Scenario,
+    robot: &mut RobotSpec,
+    parameter: &str,
+    value: f64,
+) -> Result<(), LoadError> {
+    match parameter {
+        "controller.k" | "controller.c" | "controller.k_i" => {
+            if scenario.controller.is_none() {
+                return Err(scenario_error(
+                    scenario,
+                    parameter,
+                    "the scenario has no [controller]",
+                ));
+            }
+            let Some(controller) = scenario.controller.as_mut() else {
+                return Ok(());
+            };
+            match parameter {
+                "controller.k" => controller.k = value,
+                "controller.c" => controller.c = value,
+                _ => controller.k_i = value,
+            }
+        }
+        "platform.velocity" => scenario.platform_velocity = value,
+        "alpha" => {
+            for isolator in &mut robot.isolators {
+                isolator.stiffness[0] *= value;
+                isolator.damping[0] *= value;
+            }
+        }
+        "beta" => {
+            for link in &mut robot.links {
+                if robot.frictions.iter().any(|f| f.link == link.name) {
+                    link.mass *= value;
+                    link.inertia *= value;
+                }
+            }
+        }
+        path => {
+            let Some((target, key)) = path
+                .strip_prefix("overrides.")
+                .and_then(|rest| rest.rsplit_once('.'))
+            else {
+                return Err(scenario_error(
+                    scenario,
+                    parameter,
+                    "unknown sweep parameter",
+                ));
+            };
+            scenario.overrides.push(Override {
+                target: target.to_string(),
+                key: key.to_string(),
+                value,
+            });
+        }
+    }
+    Ok(())
+}
+
+fn scenario_error(scenario: &Scenario, parameter: &str, message: &str) -> LoadError {
+    scenario.error(format!("sweep ({parameter})"), message)
+}
+
+/// The study at one grid point: the scenario with the point's parameters,
+/// assembled from the robot file as written.
+pub fn variant(
+    base: &Loaded,
+    robot_file: &RobotSpec,
+    spec: &SweepSpec,
+    index: usize,
+) -> Result<Loaded, LoadError> {
+    let mut scenario = base.scenario.clone();
+    let mut robot = robot_file.clone();
+    for (axis, value) in spec.axes.iter().zip(spec.point(index)) {
+        apply_parameter(&mut scenario, &mut robot, &axis.parameter, value)?;
+    }
+    let (robot, model) = assemble(robot, &scenario)?;
+    Ok(Loaded {
+        scenario,
+        robot,
+        model,
+    })
+}
+
+/// Linear verdict at the slipping equilibrium: (stable, largest real part).
+fn linear_verdict(loaded: &Loaded) -> Option<(bool, f64)> {
+    let scenario = &loaded.scenario;
+    let mut inputs = ScenarioExcitation::from_scenario(scenario).inputs(0.0);
+    inputs.platform_velocity = scenario.platform_velocity - scenario.reference.traverse_velocity();
+    inputs.reference = Default::default();
+    let analysis = modal_analysis(
+        &loaded.model,
+        &inputs,
+        EquilibriumKind::Slipping,
+        &loaded.model.zero_state(),
+    )
+    .ok()?;
+    Some((analysis.stable, analysis.max_real_part))
+}
+
+/// Steady peak-to-peak of the controller's sensor over the last quarter of a
+/// run, and over the quarter before it.
+fn sensor_peak_to_peak(loaded: &Loaded, duration: f64) -> Option<(f64, f64)> {
+    let scenario = &loaded.scenario;
+    let model = &loaded.model;
+    let sensor = model.controller.as_ref().map_or(0, |c| c.sensor);
+    model.sensors.get(sensor)?;
+    let excitation = ScenarioExcitation::from_scenario(scenario);
+    let settings = SimSettings {
+        t_end: duration,
+        sample_interval: (duration / 4000.0).min(1.0 / scenario.sample_rate),
+        ..SimSettings::from_scenario(scenario)
+    };
+    let x0 = initial_state(model, scenario).ok()?;
+    let trajectory = NativeEngine
+        .simulate(model, &x0, &excitation, &settings, &mut |_| {})
+        .ok()?;
+    let mut ws = model.workspace();
+    let p2p = |from: f64, to: f64, ws: &mut fistage_model::Workspace| {
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for (k, &t) in trajectory.times.iter().enumerate() {
+            if t >= from && t <= to {
+                model.evaluate(trajectory.state(k), &excitation.inputs(t), ws);
+                let value =
+                    ws.elements.sensor_position[sensor] - excitation.inputs(t).reference.position;
+                lo = lo.min(value);
+                hi = hi.max(value);
+            }
+        }
+        hi - lo
+    };
+    Some((
+        p2p(0.75 * duration, duration, &mut ws),
+        p2p(0.5 * duration, 0.75 * duration, &mut ws),
+    ))
+}
+
+/// Simulated verdict: (no persistent oscillation, amplitude). A run that is
+/// still decaying (last-quarter peak-to-peak below 80% of the quarter before,
+/// but above the threshold) is run again twice as long, at most twice.
+fn simulated_verdict(loaded: &Loaded, spec: &SweepSpec) -> Option<(bool, f64)> {
+    let mut duration = spec.duration.unwrap_or(loaded.scenario.duration);
+    for extension in 0..3 {
+        let (last, before) = sensor_peak_to_peak(loaded, duration)?;
+        if last <= spec.oscillation_threshold {
+            return Some((true, last));
+        }
+        if last >= 0.8 * before || extension == 2 {
+            return Some((false, last));
+        }
+        duration *= 2.0;
+    }
+    None
+}
+
+/// Evaluates one grid point.
+pub fn evaluate_point(
+    base: &Loaded,
+    robot_file: &RobotSpec,
+    spec: &SweepSpec,
+    index: usize,
+) -> PointResult {
+    let parameters = spec.point(index);
+    let mut result = PointResult {
+        index,
+        parameters,
+        stable_linear: None,
+        stable_sim: None,
+        amplitude: None,
+        max_real_eig: None,
+        bistable: None,
+    };
+    let Ok(loaded) = variant(base, robot_file, spec, index) else {
+        return result;
+    };
+    if spec.analysis.linear()
+        && let Some((stable, max_real)) = linear_verdict(&loaded)
+    {
+        result.stable_linear = Some(stable);
+        result.max_real_eig = Some(max_real);
+    }
+    if spec.analysis.simulation()
+        && let Some((stable, amplitude)) = simulated_verdict(&loaded, spec)
+    {
+        result.stable_sim = Some(stable);
+        result.amplitude = Some(amplitude);
+    }
+    if let (Some(linear), Some(simulated)) = (result.stable_linear, result.stable_sim) {
+        result.bistable = Some(linear && !simulated);
+    }
+    result
+}
+
+/// Evaluates the given grid points on `threads` threads; `done` is called with
+/// each finished point (from worker threads, in completion order).
+pub fn run_points(
+    base: &Loaded,
+    robot_file: &RobotSpec,
+    spec: &SweepSpec,
+    indices: &[usize],
+    threads: usize,
+    done: &(dyn Fn(&PointResult, usize) + Sync),
+) -> Vec<PointResult> {
+    let counter = AtomicUsize::new(0);
+    let work = || {
+        indices
+            .par_iter()
+            .map(|&index| {
+                let result = evaluate_point(base, robot_file, spec, index);
+                let finished = counter.fetch_add(1, Ordering::Relaxed) + 1;
+                done(&result, finished);
+                result
+            })
+            .collect::<Vec<_>>()
+    };
+    let mut results = match rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.max(1))
+        .build()
+    {
+        Ok(pool) => pool.install(work),
+        Err(_) => work(),
+    };
+    results.sort_by_key(|r| r.index);
+    results
+}
+
+fn bool_cell(value: Option<bool>) -> String {
+    value.map_or(String::new(), |b| b.to_string())
+}
+
+fn number_cell(value: Option<f64>) -> String {
+    value.map_or(String::new(), |v| format!("{v:e}"))
+}
+
+/// The CSV header: one column per axis, then the verdicts.
+pub fn header(spec: &SweepSpec) -> String {
+    let mut columns: Vec<String> = spec.axes.iter().map(|a| a.parameter.clone()).collect();
+    columns.extend(
+        [
+            "stable_linear",
+            "stable_sim",
+            "amplitude",
+            "max_real_eig",
+            "bistable",
+        ]
+        .map(String::from),
+    );
+    columns.join(",")
+}
+
+/// One CSV row (numbers in shortest round-trip form, so rows are exact).
+pub fn row(result: &PointResult) -> String {
+    let mut cells: Vec<String> = result.parameters.iter().map(|v| format!("{v:e}")).collect();
+    cells.push(bool_cell(result.stable_linear));
+    cells.push(bool_cell(result.stable_sim));
+    cells.push(number_cell(result.amplitude));
+    cells.push(number_cell(result.max_real_eig));
+    cells.push(bool_cell(result.bistable));
+    cells.join(",")
+}
+
+/// Reads rows written by [`row`] back, matching each to its grid index.
+/// Rows of other grids (or damaged rows, such as a half-written last line) are skipped.
+pub fn read_rows(path: &Path, spec: &SweepSpec) -> Vec<PointResult> {
+    let Ok(text) = std::fs::read_to_string(path) else {
+        return Vec::new();
+    };
+    let n_axes = spec.axes.len();
+    let axis_values: Vec<Vec<String>> = spec
+        .axes
+        .iter()
+        .map(|a| a.values().iter().map(|v| format!("{v:e}")).collect())
+        .collect();
+    let mut results = Vec::new();
+    for line in text.lines().skip(1) {
+        let cells: Vec<&str> = line.split(',').collect();
+        if cells.len() != n_axes + 5 {
+            continue;
+        }
+        let mut index = 0;
+        let mut stride = 1;
+        let mut matched = true;
+        for (k, values) in axis_values.iter().enumerate() {
+            match values.iter().position(|v| v == cells[k]) {
+                Some(i) => {
+                    index += i * stride;
+                    stride *= values.len();
+                }
+                None => matched = false,
+            }
+        }
+        if !matched {
+            continue;
+        }
+        let flag = |s: &str| s.parse::<bool>().ok();
+        let number = |s: &str| s.parse::<f64>().ok();
+        results.push(PointResult {
+            index,
+            parameters: spec.point(index),
+            stable_linear: flag(cells[n_axes]),
+            stable_sim: flag(cells[n_axes + 1]),
+            amplitude: number(cells[n_axes + 2]),
+            max_real_eig: number(cells[n_axes + 3]),
+            bistable: flag(cells[n_axes + 4]),
+        });
+    }
+    results
+}

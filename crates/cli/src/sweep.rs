@@ -1,0 +1,329 @@
+//! `fistage sweep SCENARIO [--out DIR] [--shard i/n] [--merge DIR ...]`: run the
+//! scenario's `[sweep]` grid in parallel with a progress bar, write
+//! `points.csv` (a column per axis, then `stable_linear`, `stable_sim`,
+//! `amplitude`, `max_real_eig`, `bistable`), `points.json`, and a stability
+//! map. Finished points are appended to `points.partial.csv` as they come, so a
+//! killed sweep resumes where it stopped; `--shard i/n` computes every n-th
+//! point starting at i (for batch job arrays) and `--merge` joins shard folders.
+
+use std::fs::OpenOptions;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+use anyhow::{Context, bail};
+use fistage_analysis::sweep::{
+    PointResult, Spacing, SweepSpec, header, read_rows, row, run_points,
+};
+use fistage_model::RobotSpec;
+use fistage_plot::{ColourScale, Heatmap, Series, XyPlot, write_heatmap, write_xy};
+
+use crate::progress;
+
+/// Arguments of `fistage sweep`.
+#[derive(clap::Args)]
+pub struct SweepArgs {
+    /// Scenario file with a [sweep] table.
+    pub scenario: PathBuf,
+    /// Output folder (default: out/<scenario>-sweep).
+    #[arg(long, short)]
+    pub out: Option<PathBuf>,
+    /// Compute only shard i of n (points i, i + n, i + 2n, ...), as "i/n".
+    #[arg(long)]
+    pub shard: Option<String>,
+    /// Merge the points of these shard folders instead of computing.
+    #[arg(long)]
+    pub merge: Vec<PathBuf>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Recompute points already in the output folder.
+    #[arg(long)]
+    pub no_resume: bool,
+}
+
+fn parse_shard(text: &str) -> anyhow::Result<(usize, usize)> {
+    let parsed = text.split_once('/').and_then(|(i, n)| {
+        Some((
+            i.trim().parse::<usize>().ok()?,
+            n.trim().parse::<usize>().ok()?,
+        ))
+    });
+    match parsed {
+        Some((i, n)) if n > 0 && i < n => Ok((i, n)),
+        _ => bail!("--shard must be i/n with 0 <= i < n, got \"{text}\""),
+    }
+}
+
+/// Runs the command.
+pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
+    let loaded = fistage_model::load(&args.scenario)?;
+    let spec = SweepSpec::from_scenario(&loaded.scenario)?;
+    let robot_file = RobotSpec::from_file(&loaded.scenario.robot)?;
+    let out_dir = args.out.clone().unwrap_or_else(|| {
+        let stem = args
+            .scenario
+            .file_stem()
+            .map_or("sweep".into(), |s| s.to_string_lossy().into_owned());
+        PathBuf::from("out").join(format!("{stem}-sweep"))
+    });
+    let shard = args.shard.as_deref().map(parse_shard).transpose()?;
+    let results = if args.merge.is_empty() {
+        compute(args, &loaded, &robot_file, &spec, shard, &out_dir)?
+    } else {
+        let mut all: Vec<PointResult> = Vec::new();
+        for dir in &args.merge {
+            let rows = read_rows(&dir.join("points.csv"), &spec);
+            anyhow::ensure!(
+                !rows.is_empty(),
+                "{}: no points of this sweep",
+                dir.join("points.csv").display()
+            );
+            all.extend(rows);
+        }
+        all.sort_by_key(|r| r.index);
+        all.dedup_by_key(|r| r.index);
+        std::fs::create_dir_all(&out_dir)
+            .with_context(|| format!("cannot create {}", out_dir.display()))?;
+        all
+    };
+    write_points(&spec, &results, &out_dir)?;
+    let pictures = draw(&loaded.scenario.title, &spec, &results, &out_dir)?;
+    let missing = spec.len() - results.len();
+    println!(
+        "{} of {} points in {}/points.csv{}{}",
+        results.len(),
+        spec.len(),
+        out_dir.display(),
+        if missing > 0 {
+            format!(" ({missing} not computed here)")
+        } else {
+            String::new()
+        },
+        if pictures.is_empty() {
+            String::new()
+        } else {
+            format!(", map in {}", pictures.join(", "))
+        }
+    );
+    summarize(&results);
+    Ok(())
+}
+
+fn compute(
+    args: &SweepArgs,
+    loaded: &fistage_model::Loaded,
+    robot_file: &RobotSpec,
+    spec: &SweepSpec,
+    shard: Option<(usize, usize)>,
+    out_dir: &Path,
+) -> anyhow::Result<Vec<PointResult>> {
+    std::fs::create_dir_all(out_dir)
+        .with_context(|| format!("cannot create {}", out_dir.display()))?;
+    let (points_path, partial_path) = (
+        out_dir.join("points.csv"),
+        out_dir.join("points.partial.csv"),
+    );
+    let mine = |index: usize| shard.is_none_or(|(i, n)| index % n == i);
+    let mut finished: Vec<PointResult> = Vec::new();
+    if !args.no_resume {
+        finished.extend(read_rows(&points_path, spec));
+        finished.extend(read_rows(&partial_path, spec));
+        finished.retain(|r| mine(r.index));
+        finished.sort_by_key(|r| r.index);
+        finished.dedup_by_key(|r| r.index);
+    }
+    let todo: Vec<usize> = (0..spec.len())
+        .filter(|&k| mine(k) && finished.binary_search_by_key(&k, |r| r.index).is_err())
+        .collect();
+    if !finished.is_empty() {
+        eprintln!(
+            "resuming: {} points already done, {} to go",
+            finished.len(),
+            todo.len()
+        );
+    }
+    let fresh = args.no_resume || !partial_path.exists();
+    let mut partial = OpenOptions::new()
+        .create(true)
+        .append(!args.no_resume)
+        .write(true)
+        .truncate(args.no_resume)
+        .open(&partial_path)
+        .with_context(|| format!("cannot write {}", partial_path.display()))?;
+    if fresh {
+        writeln!(partial, "{}", header(spec))?;
+    }
+    let partial = Mutex::new(partial);
+    let bar = progress::bar(&format!("sweep {} points", todo.len()));
+    let total = todo.len().max(1);
+    let threads = args
+        .threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let new = run_points(loaded, robot_file, spec, &todo, threads, &|result, done| {
+        if let Ok(mut file) = partial.lock() {
+            // A failed write only costs the resume of this point.
+            let _ = writeln!(file, "{}", row(result)).and_then(|_| file.flush());
+        }
+        progress::set_fraction(&bar, done as f64 / total as f64);
+    });
+    bar.finish_and_clear();
+    finished.extend(new);
+    finished.sort_by_key(|r| r.index);
+    Ok(finished)
+}
+
+fn write_points(spec: &SweepSpec, results: &[PointResult], out_dir: &Path) -> anyhow::Result<()> {
+    let mut text = header(spec) + "\n";
+    for result in results {
+        text.push_str(&row(result));
+        text.push('\n');
+    }
+    let path = out_dir.join("points.csv");
+    std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?;
+    let json: Vec<serde_json::Value> = results
+        .iter()
+        .map(|r| {
+            let mut object = serde_json::Map::new();
+            for (axis, value) in spec.axes.iter().zip(&r.parameters) {
+                object.insert(axis.parameter.clone(), serde_json::json!(value));
+            }
+            object.insert("stable_linear".into(), serde_json::json!(r.stable_linear));
+            object.insert("stable_sim".into(), serde_json::json!(r.stable_sim));
+            object.insert("amplitude".into(), serde_json::json!(r.amplitude));
+            object.insert("max_real_eig".into(), serde_json::json!(r.max_real_eig));
+            object.insert("bistable".into(), serde_json::json!(r.bistable));
+            serde_json::Value::Object(object)
+        })
+        .collect();
+    let json_path = out_dir.join("points.json");
+    std::fs::write(&json_path, serde_json::to_string_pretty(&json)? + "\n")
+        .with_context(|| format!("cannot write {}", json_path.display()))?;
+    // The partial file is only a journal; the finished table replaces it.
+    let _ = std::fs::remove_file(out_dir.join("points.partial.csv"));
+    Ok(())
+}
+
+/// 0 stable, 1 oscillating (or linearly unstable), 2 bistable; NaN not computed.
+fn category(result: &PointResult) -> f64 {
+    if result.bistable == Some(true) {
+        2.0
+    } else if let Some(stable) = result.stable_sim.or(result.stable_linear) {
+        if stable { 0.0 } else { 1.0 }
+    } else {
+        f64::NAN
+    }
+}
+
+fn draw(
+    title: &str,
+    spec: &SweepSpec,
+    results: &[PointResult],
+    out_dir: &Path,
+) -> anyhow::Result<Vec<String>> {
+    let mut written = Vec::new();
+    match spec.axes.as_slice() {
+        [x_axis, y_axis] => {
+            let (xs, ys) = (x_axis.values(), y_axis.values());
+            let mut values = vec![f64::NAN; xs.len() * ys.len()];
+            let mut linear = vec![None; xs.len() * ys.len()];
+            for result in results {
+                values[result.index] = category(result);
+                linear[result.index] = result.stable_linear;
+            }
+            let (mut bx, mut by) = (Vec::new(), Vec::new());
+            let mid = |a: f64, b: f64, log: bool| if log { (a * b).sqrt() } else { 0.5 * (a + b) };
+            for row in 0..ys.len() {
+                for col in 0..xs.len() {
+                    let here = linear[row * xs.len() + col];
+                    if col + 1 < xs.len()
+                        && here.is_some()
+                        && linear[row * xs.len() + col + 1].is_some_and(|v| Some(v) != here)
+                    {
+                        bx.push(mid(xs[col], xs[col + 1], x_axis.spacing == Spacing::Log));
+                        by.push(ys[row]);
+                    }
+                    if row + 1 < ys.len()
+                        && here.is_some()
+                        && linear[(row + 1) * xs.len() + col].is_some_and(|v| Some(v) != here)
+                    {
+                        bx.push(xs[col]);
+                        by.push(mid(ys[row], ys[row + 1], y_axis.spacing == Spacing::Log));
+                    }
+                }
+            }
+            let mut map = Heatmap::new(
+                if title.is_empty() {
+                    "stability map".to_string()
+                } else {
+                    title.to_string()
+                },
+                x_axis.parameter.clone(),
+                y_axis.parameter.clone(),
+                xs,
+                ys,
+                values,
+                ColourScale::Categorical {
+                    labels: vec!["stable".into(), "oscillating".into(), "bistable".into()],
+                },
+            );
+            map.x_log = x_axis.spacing == Spacing::Log;
+            map.y_log = y_axis.spacing == Spacing::Log;
+            map.value_label = "verdict".into();
+            if !bx.is_empty() {
+                map.overlay
+                    .push(Series::markers("linear stability boundary", bx, by));
+            }
+            for extension in ["svg", "png"] {
+                let name = format!("map.{extension}");
+                write_heatmap(&map, &out_dir.join(&name))
+                    .with_context(|| format!("cannot draw {name}"))?;
+                written.push(name);
+            }
+        }
+        [axis] => {
+            let xs: Vec<f64> = results.iter().map(|r| r.parameters[0]).collect();
+            let mut series = Vec::new();
+            let amplitude: Vec<f64> = results
+                .iter()
+                .map(|r| r.amplitude.unwrap_or(f64::NAN))
+                .collect();
+            if amplitude.iter().any(|v| v.is_finite()) {
+                series.push(Series::line_and_markers(
+                    "steady peak-to-peak [m]",
+                    xs.clone(),
+                    amplitude,
+                ));
+            }
+            let eig: Vec<f64> = results
+                .iter()
+                .map(|r| r.max_real_eig.unwrap_or(f64::NAN))
+                .collect();
+            if eig.iter().any(|v| v.is_finite()) {
+                series.push(Series::line_and_markers("max Re(lambda) [1/s]", xs, eig));
+            }
+            let mut plot = XyPlot::new(title.to_string(), axis.parameter.clone(), "value", series);
+            plot.x_log = axis.spacing == Spacing::Log;
+            for extension in ["svg", "png"] {
+                let name = format!("sweep.{extension}");
+                write_xy(&plot, &out_dir.join(&name))
+                    .with_context(|| format!("cannot draw {name}"))?;
+                written.push(name);
+            }
+        }
+        _ => {}
+    }
+    Ok(written)
+}
+
+fn summarize(results: &[PointResult]) {
+    let count = |f: &dyn Fn(&PointResult) -> bool| results.iter().filter(|r| f(r)).count();
+    println!(
+        "linear: {} stable, {} unstable; simulation: {} stable, {} oscillating; {} bistable",
+        count(&|r| r.stable_linear == Some(true)),
+        count(&|r| r.stable_linear == Some(false)),
+        count(&|r| r.stable_sim == Some(true)),
+        count(&|r| r.stable_sim == Some(false)),
+        count(&|r| r.bistable == Some(true)),
+    );
+}
