@@ -6,7 +6,9 @@
 //! the bearings; and sweeps of stability over one or two parameters.
 
 pub mod eigen;
+pub mod lyapunov;
 pub mod modes;
+pub mod routh;
 pub mod sweep;
 
 pub use eigen::{EigenPair, eigen_decomposition};

@@ -4,6 +4,7 @@ mod bench;
 mod check;
 mod figures;
 mod identify;
+mod lyapunov;
 mod modes;
 mod progress;
 mod run;
@@ -34,6 +35,8 @@ enum Command {
     Modes(modes::ModesArgs),
     /// Stability over a grid of one or two parameters (points.csv, points.json, map).
     Sweep(sweep::SweepArgs),
+    /// Largest Lyapunov exponent: limit cycle (about 0) or chaos (positive).
+    Lyapunov(lyapunov::LyapunovArgs),
     /// Identify LuGre parameters from measured stage data.
     Identify(identify::IdentifyArgs),
 }
@@ -47,5 +50,6 @@ fn main() -> anyhow::Result<()> {
         Command::Check(args) => check::run(&args),
         Command::Modes(args) => modes::run(&args),
         Command::Sweep(args) => sweep::run(&args),
+        Command::Lyapunov(args) => lyapunov::run(&args),
     }
 }

@@ -94,6 +94,7 @@ pub fn run(args: &ModesArgs) -> anyhow::Result<()> {
         for analysis in &analyses {
             print_table(analysis);
         }
+        print_routh_hurwitz(&loaded, inputs.platform_velocity);
         println!(
             "wrote modes.json and {} pictures in {}",
             pictures.len(),
@@ -351,4 +352,41 @@ fn convex_ring(points: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
         ring.push(first);
     }
     ring
+}
+
+/// For the rigid 1-DOF stage (one prismatic body, one contact, a PD servo),
+/// the paper's Routh-Hurwitz test at the slipping equilibrium, as printed and corrected.
+fn print_routh_hurwitz(loaded: &Loaded, platform_velocity: f64) {
+    use fistage_analysis::routh::{RigidStage, rigid_slipping};
+    let model = &loaded.model;
+    let (Some(controller), [body], [friction]) = (
+        &model.controller,
+        model.bodies.as_slice(),
+        model.frictions.as_slice(),
+    ) else {
+        return;
+    };
+    if !matches!(body.joint.motion, JointMotion::Prismatic { .. })
+        || controller.k_i != 0.0
+        || platform_velocity == 0.0
+    {
+        return;
+    }
+    let test = rigid_slipping(&RigidStage {
+        mass: body.mass,
+        k: controller.k,
+        c: controller.c,
+        lugre: friction.lugre,
+        platform_velocity,
+    });
+    let [a1, a2, a3] = test.coefficients;
+    println!(
+        "Routh-Hurwitz (rigid stage, slipping): a1 = {a1:.6e}, a2 = {a2:.6e}, a3 = {a3:.6e}; corrected: {}; as printed in the paper: {}",
+        if test.stable { "stable" } else { "unstable" },
+        if test.stable_as_printed {
+            "stable"
+        } else {
+            "unstable"
+        }
+    );
 }

@@ -13,7 +13,7 @@ use std::sync::Mutex;
 
 use anyhow::{Context, bail};
 use fistage_analysis::sweep::{
-    PointResult, Spacing, SweepSpec, header, read_rows, row, run_points,
+    Analyses, PointResult, Spacing, SweepSpec, header, read_rows, row, run_points,
 };
 use fistage_model::RobotSpec;
 use fistage_plot::{ColourScale, Heatmap, Series, XyPlot, write_heatmap, write_xy};
@@ -264,7 +264,11 @@ fn draw(
                 ys,
                 values,
                 ColourScale::Categorical {
-                    labels: vec!["stable".into(), "oscillating".into(), "bistable".into()],
+                    labels: if matches!(spec.analysis, Analyses::Linear) {
+                        vec!["stable".into(), "unstable".into(), "bistable".into()]
+                    } else {
+                        vec!["stable".into(), "oscillating".into(), "bistable".into()]
+                    },
                 },
             );
             map.x_log = x_axis.spacing == Spacing::Log;
