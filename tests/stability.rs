@@ -167,3 +167,27 @@ fn lyapunov_exponent_separates_limit_cycle_from_chaos() {
     assert!(fig05.abs() < 1.0, "limit cycle exponent {fig05}");
     assert!(chaos > 4.0, "chaotic exponent {chaos}");
 }
+
+/// `spread.friction` mismatches the four bearings evenly around the file's
+/// value (fl +s, fr +s/3, rl -s/3, rr -s), keeping the mean.
+#[test]
+fn spread_parameter_mismatches_the_bearings() {
+    use fistage_analysis::sweep::apply_parameter;
+    let loaded = load("scenarios/coupling/symmetric_traverse.toml");
+    let mut scenario = loaded.scenario.clone();
+    let mut robot = RobotSpec::from_file(&scenario.robot).expect("robot");
+    apply_parameter(&mut scenario, &mut robot, "spread.friction", 0.3).expect("spread");
+    let names: Vec<&str> = robot.frictions.iter().map(|f| f.name.as_str()).collect();
+    assert_eq!(
+        names,
+        ["friction_fl", "friction_fr", "friction_rl", "friction_rr"]
+    );
+    for (friction, factor) in robot.frictions.iter().zip([1.3, 1.1, 0.9, 0.7]) {
+        assert!((friction.lugre.f_c - 1.275 * factor).abs() < 1e-12);
+        assert!((friction.lugre.f_s - 1.625 * factor).abs() < 1e-12);
+        assert!((friction.lugre.sigma0 - 5.5e5 * factor).abs() < 1e-6);
+        assert_eq!(friction.lugre.v_s, 0.0167);
+    }
+    let mut robot = RobotSpec::from_file(&scenario.robot).expect("robot");
+    assert!(apply_parameter(&mut scenario, &mut robot, "spread.mu", 0.3).is_err());
+}

@@ -24,6 +24,13 @@
 //! (x) axis, `beta` the mass (and inertia) of every link that carries a
 //! friction contact: the paper's kappa_1 = alpha kappa_1, eta_1 = alpha eta_1
 //! and rho = beta rho (Fig. 9). Both scale the robot file's values.
+//!
+//! `spread.<key>` (a LuGre parameter: `f_c`, `sigma0`, ...) mismatches the
+//! friction contacts: contact i of n (file order) gets its value times
+//! `1 + s w_i` with weights w running evenly from +1 to -1 (for the four-bearing
+//! stage fl, fr, rl, rr: +1, +1/3, -1/3, -1, so the left and the front bearings
+//! sit above the mean). `spread.friction` spreads f_c, f_s and sigma0 together
+//! (keeping f_s >= f_c).
 
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -136,13 +143,14 @@ fn default_threshold() -> f64 {
 }
 
 /// Parameter paths every model accepts, besides `overrides.<element>.<key>`.
-pub const PARAMETERS: [&str; 6] = [
+pub const PARAMETERS: [&str; 7] = [
     "controller.k",
     "controller.c",
     "controller.k_i",
     "platform.velocity",
     "alpha",
     "beta",
+    "spread.friction",
 ];
 
 impl SweepSpec {
@@ -178,7 +186,7 @@ impl SweepSpec {
                 return Err(scenario.error(
                     format!("{key}.parameter"),
                     format!(
-                        "unknown parameter \"{}\" (use {} or overrides.<element>.<key>)",
+                        "unknown parameter \"{}\" (use {}, spread.<lugre key> or overrides.<element>.<key>)",
                         axis.parameter,
                         PARAMETERS.join(", ")
                     ),
@@ -273,6 +281,32 @@ pub fn apply_parameter(
                 if robot.frictions.iter().any(|f| f.link == link.name) {
                     link.mass *= value;
                     link.inertia *= value;
+                }
+            }
+        }
+        path if path.starts_with("spread.") => {
+            let key = &path["spread.".len()..];
+            let keys: Vec<&str> = if key == "friction" {
+                vec!["f_c", "f_s", "sigma0"]
+            } else {
+                vec![key]
+            };
+            let n = robot.frictions.len();
+            for (i, friction) in robot.frictions.iter_mut().enumerate() {
+                let weight = if n > 1 {
+                    1.0 - 2.0 * i as f64 / (n - 1) as f64
+                } else {
+                    0.0
+                };
+                for key in &keys {
+                    let Some(slot) = friction.lugre.get_mut(key) else {
+                        return Err(scenario_error(
+                            scenario,
+                            parameter,
+                            "unknown LuGre parameter",
+                        ));
+                    };
+                    *slot *= 1.0 + value * weight;
                 }
             }
         }
