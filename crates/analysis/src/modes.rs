@@ -87,6 +87,10 @@ pub struct ModalAnalysis {
     /// The tangent-coordinate Jacobian.
     #[serde(skip)]
     pub jacobian: DMatrix<f64>,
+    /// Names of the tangent coordinates (rows and columns of the Jacobian).
+    pub jacobian_coordinates: Vec<String>,
+    /// The Jacobian row by row, for the JSON output.
+    pub jacobian_rows: Vec<Vec<f64>>,
 }
 
 /// Readable names of the position coordinates in tangent order: floating
@@ -222,6 +226,10 @@ pub fn modal_analysis(
         max_real_part,
         neutral,
         stable: max_real_part < 0.0,
+        jacobian_coordinates: tangent.names.clone(),
+        jacobian_rows: (0..jacobian.nrows())
+            .map(|r| jacobian.row(r).iter().copied().collect())
+            .collect(),
         jacobian,
     })
 }

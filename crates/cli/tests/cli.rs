@@ -193,5 +193,32 @@ fn sweep_shards_merge_and_resume_to_the_same_table() {
     assert!(String::from_utf8_lossy(&result.stderr).contains("6 points already done, 6 to go"));
     let resumed = std::fs::read_to_string(resumed_dir.join("points.csv")).expect("csv");
     assert_eq!(resumed, whole, "resumed run differs from the whole run");
+    // A killed run leaves only its journal, possibly with a half-written last line.
+    let killed = dir.join("killed");
+    std::fs::create_dir_all(&killed).expect("dir");
+    let journal: String = whole
+        .lines()
+        .take(1 + 5)
+        .map(|l| format!("{l}\n"))
+        .collect::<String>()
+        + "1e4,1e1,tr";
+    std::fs::write(killed.join("points.partial.csv"), journal).expect("journal");
+    let result = fistage()
+        .arg("sweep")
+        .arg(&scenario)
+        .arg("--out")
+        .arg(&killed)
+        .output()
+        .expect("runs");
+    assert!(String::from_utf8_lossy(&result.stderr).contains("5 points already done, 7 to go"));
+    let recovered = std::fs::read_to_string(killed.join("points.csv")).expect("csv");
+    assert_eq!(
+        recovered, whole,
+        "run resumed from a journal differs from the whole run"
+    );
+    assert!(
+        !killed.join("points.partial.csv").exists(),
+        "the journal is removed once the table is written"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
