@@ -55,6 +55,18 @@ fn signals_with<'a>(table: &'a SignalTable, suffix: &str, unit: &str) -> Vec<(&'
         .collect()
 }
 
+/// The `<element>.force` signals of the named elements.
+fn forces_of<'a, 'n>(
+    table: &'a SignalTable,
+    elements: impl Iterator<Item = &'n str>,
+) -> Vec<(&'a str, &'a [f64])> {
+    let wanted: Vec<String> = elements.map(|e| format!("{e}.force")).collect();
+    signals_with(table, ".force", "N")
+        .into_iter()
+        .filter(|(name, _)| wanted.iter().any(|w| w == name))
+        .collect()
+}
+
 fn length_panel(label: &str, table: &SignalTable, named: &[(&str, &[f64])]) -> Option<Panel> {
     if named.is_empty() {
         return None;
@@ -80,7 +92,16 @@ fn force_panel(label: &str, table: &SignalTable, named: &[(&str, &[f64])]) -> Op
 
 fn response_figure(loaded: &Loaded, table: &SignalTable) -> Figure {
     let mut sensor_signals = signals_with(table, ".position", "m");
-    if let Some(reference) = table.column("controller.reference") {
+    let reference = table.column("controller.reference");
+    let moving = reference.is_some_and(|r| r.iter().any(|v| *v != r[0]));
+    let mut sensor_label = "sensor";
+    if moving {
+        // A moving reference dwarfs the error: show the tracking error instead.
+        if let Some(error) = table.column("controller.error") {
+            sensor_signals = vec![("controller.error", error)];
+            sensor_label = "tracking error";
+        }
+    } else if let Some(reference) = reference {
         sensor_signals.push(("reference", reference));
     }
     let joints: Vec<_> = loaded
@@ -104,43 +125,42 @@ fn response_figure(loaded: &Loaded, table: &SignalTable) -> Figure {
         })
         .collect();
     let panels = [
-        length_panel("sensor", table, &sensor_signals),
+        length_panel(sensor_label, table, &sensor_signals),
         length_panel("joint position", table, &joints),
         force_panel(
             "friction force",
             table,
-            &signals_with(table, ".force", "N")
-                .into_iter()
-                .filter(|(name, _)| {
-                    loaded
-                        .model
-                        .frictions
-                        .iter()
-                        .any(|f| name.starts_with(&format!("{}.", f.name)))
-                })
-                .collect::<Vec<_>>(),
+            &forces_of(
+                table,
+                loaded.model.frictions.iter().map(|f| f.name.as_str()),
+            ),
         ),
         force_panel(
             "actuator force",
             table,
-            &signals_with(table, ".force", "N")
-                .into_iter()
-                .filter(|(name, _)| {
-                    loaded
-                        .model
-                        .actuators
-                        .iter()
-                        .any(|a| name.starts_with(&format!("{}.", a.name)))
-                })
-                .collect::<Vec<_>>(),
+            &forces_of(
+                table,
+                loaded.model.actuators.iter().map(|a| a.name.as_str()),
+            ),
         ),
     ];
+    let title = figure_title(loaded);
+    Figure::new(title, "time [s]", panels.into_iter().flatten().collect())
+}
+
+/// The scenario's title, shortened to fit a figure's width.
+pub fn figure_title(loaded: &Loaded) -> String {
+    const LONGEST: usize = 70;
     let title = if loaded.scenario.title.is_empty() {
         loaded.scenario.file.display().to_string()
     } else {
         loaded.scenario.title.clone()
     };
-    Figure::new(title, "time [s]", panels.into_iter().flatten().collect())
+    if title.chars().count() <= LONGEST {
+        return title;
+    }
+    let cut: String = title.chars().take(LONGEST - 3).collect();
+    format!("{}...", cut.trim_end())
 }
 
 /// Velocity against position of the first sensor: the whole run, and the

@@ -88,7 +88,12 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
         all
     };
     write_points(&spec, &results, &out_dir)?;
-    let pictures = draw(&loaded.scenario.title, &spec, &results, &out_dir)?;
+    let pictures = draw(
+        &crate::figures::figure_title(&loaded),
+        &spec,
+        &results,
+        &out_dir,
+    )?;
     let missing = spec.len() - results.len();
     println!(
         "{} of {} points in {}/points.csv{}{}",
