@@ -604,8 +604,6 @@ impl<'a> Assembler<'a> {
             gravity: Vector3::from(scenario.gravity),
             signals: Vec::new(),
             layout,
-            constant_mass: None,
-            constant_mass_inverse: None,
             translational: false,
             translational_map: None,
             mass_blocks: Vec::new(),
@@ -761,10 +759,8 @@ fn check_mass_matrix(model: &mut Model, file: &Path) -> Result<(), LoadError> {
     };
     model.mass_blocks = mass_blocks(model, &mass);
     if model.bodies.iter().all(|b| !b.joint.motion.rotates()) {
-        model.constant_mass_inverse = Some(factor.inverse());
-        model.constant_mass = Some(factor);
         model.translational = true;
-        let inverse = model.constant_mass_inverse.clone().unwrap_or_default();
+        let inverse = factor.inverse();
         model.translational_map = Some(crate::translational::TranslationalMap::build(
             model, &inverse,
         ));

@@ -2,7 +2,7 @@
 //! world, force elements attached to them, the servo controller, and the named
 //! state layout. Built by [`crate::assembly`]; evaluated by [`crate::dynamics`].
 
-use nalgebra::{Cholesky, Dyn, Isometry3, Matrix3, Vector3};
+use nalgebra::{Isometry3, Matrix3, Vector3};
 
 use crate::lugre::LugreParams;
 use crate::reference::ReferenceSample;
@@ -321,11 +321,6 @@ pub struct Model {
     pub layout: StateLayout,
     /// Output signals, in the order [`Model::outputs`] writes them.
     pub signals: Vec<SignalInfo>,
-    /// Factor of the mass matrix when it does not depend on the configuration
-    /// (no joint rotates a body).
-    pub(crate) constant_mass: Option<Cholesky<f64, Dyn>>,
-    /// Inverse of the constant mass matrix, when there is one.
-    pub(crate) constant_mass_inverse: Option<nalgebra::DMatrix<f64>>,
     /// True when no joint rotates a body: angular velocities stay zero.
     pub(crate) translational: bool,
     /// Diagonal blocks of the mass matrix.
