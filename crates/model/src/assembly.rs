@@ -290,6 +290,7 @@ impl<'a> Assembler<'a> {
                             chain,
                             block: 0,
                             chain_local: Vec::new(),
+                            turns: motion.rotates() || parent.is_some_and(|p| self.bodies[p].turns),
                         });
                         q_offset += motion.nq();
                         v_offset += motion.nv();
@@ -529,6 +530,10 @@ impl<'a> Assembler<'a> {
                 attach_rotations: [
                     *parent_attach.rotation.to_rotation_matrix().matrix(),
                     *child_attach.rotation.to_rotation_matrix().matrix(),
+                ],
+                attach_is_identity: [
+                    parent_attach.rotation.angle() == 0.0,
+                    child_attach.rotation.angle() == 0.0,
                 ],
             });
         }

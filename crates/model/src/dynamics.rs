@@ -316,9 +316,17 @@ impl Model {
                 None => (Matrix3::identity(), zero, zero, zero, zero, zero),
             };
             let joint = &body.joint;
-            let joint_rotation = parent_rotation * cast33::<S>(&joint.origin_rotation);
-            let joint_origin =
-                parent_origin + parent_rotation * cast3::<S>(&joint.origin.translation.vector);
+            let (joint_rotation, joint_origin) = match body.parent {
+                // Root bodies: the joint frame is given in the world.
+                None => (
+                    cast33::<S>(&joint.origin_rotation),
+                    cast3::<S>(&joint.origin.translation.vector),
+                ),
+                Some(_) => (
+                    parent_rotation * cast33::<S>(&joint.origin_rotation),
+                    parent_origin + parent_rotation * cast3::<S>(&joint.origin.translation.vector),
+                ),
+            };
             let (q0, v0) = (joint.q_offset, joint.v_offset);
             let mut linear_rate = Vector3::zeros();
             let mut angular_rate = Vector3::zeros();
@@ -369,10 +377,16 @@ impl Model {
 
     fn isolator_forces<S: Scalar>(&self, ws: &mut Workspace<S>) {
         for (k, isolator) in self.isolators.iter().enumerate() {
-            let parent_rotation =
-                frame_rotation(isolator.parent, ws) * cast33::<S>(&isolator.attach_rotations[0]);
-            let child_rotation =
-                frame_rotation(isolator.child, ws) * cast33::<S>(&isolator.attach_rotations[1]);
+            let attach = |frame: Frame, side: usize, ws: &Workspace<S>| {
+                let rotation = frame_rotation(frame, ws);
+                if isolator.attach_is_identity[side] {
+                    rotation
+                } else {
+                    rotation * cast33::<S>(&isolator.attach_rotations[side])
+                }
+            };
+            let parent_rotation = attach(isolator.parent, 0, ws);
+            let child_rotation = attach(isolator.child, 1, ws);
             let (parent_point, _) = point_state(
                 isolator.parent,
                 &isolator.parent_attach.translation.vector,
@@ -484,7 +498,7 @@ impl Model {
             let accel_com = ws.bias_accel[i] + alpha.cross(&r) + omega.cross(&omega.cross(&r));
             let inertial_force = (accel_com - gravity) * S::constant(body.mass);
             let mut inertial_moment = com.cross(&inertial_force);
-            if !self.translational {
+            if body.turns {
                 let inertia =
                     ws.rotation[i] * cast33::<S>(&body.inertia) * ws.rotation[i].transpose();
                 inertial_moment += inertia * alpha + omega.cross(&(inertia * omega));

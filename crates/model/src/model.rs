@@ -97,6 +97,9 @@ pub struct Body {
     pub block: usize,
     /// Positions of `chain` within that block.
     pub chain_local: Vec<usize>,
+    /// Whether any joint between the world and this body rotates (otherwise its
+    /// angular velocity and acceleration are zero and its inertia never enters).
+    pub turns: bool,
 }
 
 /// The joint-space mass matrix is block diagonal: one block per subtree hanging
@@ -132,6 +135,8 @@ pub struct Isolator {
     pub damping: [f64; 6],
     /// Rotations of the two attach frames as matrices.
     pub attach_rotations: [Matrix3<f64>; 2],
+    /// Whether each attach rotation is the identity (its product can be skipped).
+    pub attach_is_identity: [bool; 2],
 }
 
 /// A LuGre contact between a body and its counter-surface. The counter-surface
