@@ -609,7 +609,6 @@ impl<'a> Assembler<'a> {
             gravity: Vector3::from(scenario.gravity),
             signals: Vec::new(),
             layout,
-            translational: false,
             translational_map: None,
             mass_blocks: Vec::new(),
         };
@@ -764,7 +763,6 @@ fn check_mass_matrix(model: &mut Model, file: &Path) -> Result<(), LoadError> {
     };
     model.mass_blocks = mass_blocks(model, &mass);
     if model.bodies.iter().all(|b| !b.joint.motion.rotates()) {
-        model.translational = true;
         let inverse = factor.inverse();
         model.translational_map = Some(crate::translational::TranslationalMap::build(
             model, &inverse,

@@ -326,8 +326,6 @@ pub struct Model {
     pub layout: StateLayout,
     /// Output signals, in the order [`Model::outputs`] writes them.
     pub signals: Vec<SignalInfo>,
-    /// True when no joint rotates a body: angular velocities stay zero.
-    pub(crate) translational: bool,
     /// Diagonal blocks of the mass matrix.
     pub(crate) mass_blocks: Vec<MassBlock>,
     /// Constant Jacobians of a translational model.
