@@ -191,3 +191,22 @@ fn missing_files_and_bad_trees_are_named() {
     let xml = shipped_robot().replacen("<mass value=\"1.0\"/>", "<mass value=\"0\"/>", 1);
     assert_mentions(&robot_error(&xml), &["link \"table\"", "no mass"]);
 }
+
+#[test]
+fn unknown_output_signal_is_named_before_the_run() {
+    let mut loaded = fistage_tests::load("scenarios/paper/fig05b_fi.toml");
+    loaded.scenario.signals = Some(vec!["encoder.position".into(), "encoder.jerk".into()]);
+    loaded.scenario.duration = 1e6; // would take hours if it ran first
+    let error = fistage_sim::run_scenario(&loaded, &mut |_| {})
+        .expect_err("must fail")
+        .to_string();
+    assert_mentions(
+        &error,
+        &[
+            "fig05b_fi.toml",
+            "output.signals",
+            "encoder.jerk",
+            "encoder.velocity",
+        ],
+    );
+}

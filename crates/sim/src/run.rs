@@ -66,6 +66,31 @@ pub fn initial_state(model: &Model, scenario: &Scenario) -> Result<Vec<f64>, Loa
     Ok(x)
 }
 
+/// Every name in `output.signals` must be a signal of the model (checked
+/// before integrating, so a typo costs nothing).
+fn check_signal_names(model: &Model, scenario: &Scenario) -> Result<(), LoadError> {
+    let Some(wanted) = &scenario.signals else {
+        return Ok(());
+    };
+    let missing: Vec<&str> = wanted
+        .iter()
+        .filter(|name| model.signal_index(name).is_none())
+        .map(String::as_str)
+        .collect();
+    if missing.is_empty() {
+        return Ok(());
+    }
+    let available: Vec<&str> = model.signals.iter().map(|s| s.name.as_str()).collect();
+    Err(scenario.error(
+        "output.signals",
+        format!(
+            "unknown signal(s) {} (available: {})",
+            missing.join(", "),
+            available.join(", ")
+        ),
+    ))
+}
+
 /// Runs a loaded scenario with the engine it names.
 pub fn run_scenario(loaded: &Loaded, progress: &mut dyn FnMut(f64)) -> Result<RunOutput, RunError> {
     let scenario = &loaded.scenario;
@@ -80,6 +105,7 @@ pub fn run_scenario(loaded: &Loaded, progress: &mut dyn FnMut(f64)) -> Result<Ru
             ),
         )
     })?;
+    check_signal_names(model, scenario)?;
     let x0 = initial_state(model, scenario)?;
     let excitation = ScenarioExcitation::from_scenario(scenario);
     let settings = SimSettings::from_scenario(scenario);
@@ -92,21 +118,8 @@ pub fn run_scenario(loaded: &Loaded, progress: &mut dyn FnMut(f64)) -> Result<Ru
     let all = trajectory.signals(model, &excitation);
     let signals = match &scenario.signals {
         None => all,
-        Some(wanted) => all.select(wanted).map_err(|missing| {
-            scenario.error(
-                "output.signals",
-                format!(
-                    "unknown signal(s) {} (available: {})",
-                    missing.join(", "),
-                    model
-                        .signals
-                        .iter()
-                        .map(|s| s.name.as_str())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-            )
-        })?,
+        // Names were checked before the run; select cannot miss.
+        Some(wanted) => all.select(wanted).unwrap_or_default(),
     };
     let summary = summarize(&signals, scenario.window[0], scenario.window[1]);
     Ok(RunOutput {
