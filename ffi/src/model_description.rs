@@ -1,0 +1,162 @@
+//! `modelDescription.xml` for FMI 2.0 Co-Simulation: unit definitions, the
+//! co-simulation capabilities, the default experiment from the scenario, every
+//! variable of [`crate::variables`], and the model structure (outputs and
+//! initial unknowns). The GUID is a hash of the description itself, so the
+//! same model always gets the same GUID and any change gets a new one.
+
+use fistage_model::{Model, Scenario};
+
+use crate::variables::{Causality, Variable, variables};
+
+/// The C identifier of the exported functions' library (`binaries/linux64/<id>.so`).
+pub const MODEL_IDENTIFIER: &str = "fistage_stage";
+
+/// What the unit promises importers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Capabilities {
+    /// `canGetAndSetFMUstate` and `canSerializeFMUstate`.
+    pub fmu_state: bool,
+    /// `providesDirectionalDerivative`.
+    pub directional_derivatives: bool,
+}
+
+/// SI base-unit exponents (kg, m, s, rad) of each unit name used.
+const UNITS: [(&str, [i32; 4]); 14] = [
+    ("1", [0, 0, 0, 0]),
+    ("m", [0, 1, 0, 0]),
+    ("m/s", [0, 1, -1, 0]),
+    ("m.s", [0, 1, 1, 0]),
+    ("N", [1, 1, -2, 0]),
+    ("N/m", [1, 0, -2, 0]),
+    ("N.s/m", [1, 0, -1, 0]),
+    ("N/(m.s)", [1, 0, -3, 0]),
+    ("rad", [0, 0, 0, 1]),
+    ("rad/s", [0, 0, -1, 1]),
+    ("N.m/rad", [1, 2, -2, -1]),
+    ("N.m.s/rad", [1, 2, -1, -1]),
+    ("kg", [1, 0, 0, 0]),
+    ("s", [0, 0, 1, 0]),
+];
+
+fn escape(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// Shortest round-trip decimal form of a start value.
+fn number(value: f64) -> String {
+    format!("{value:?}")
+}
+
+fn unit_definitions(used: &[&str]) -> String {
+    let mut xml = String::from("  <UnitDefinitions>\n");
+    for (name, [kg, m, s, rad]) in UNITS.iter().filter(|(name, _)| used.contains(name)) {
+        let mut base = String::new();
+        for (exponent, symbol) in [(kg, "kg"), (m, "m"), (s, "s"), (rad, "rad")] {
+            if *exponent != 0 {
+                base.push_str(&format!(" {symbol}=\"{exponent}\""));
+            }
+        }
+        xml.push_str(&format!(
+            "    <Unit name=\"{}\"><BaseUnit{base}/></Unit>\n",
+            escape(name)
+        ));
+    }
+    xml.push_str("  </UnitDefinitions>\n");
+    xml
+}
+
+fn scalar_variable(variable: &Variable) -> String {
+    let (causality, variability, initial) = match variable.causality {
+        Causality::Parameter => ("parameter", "fixed", " initial=\"exact\""),
+        Causality::Input => ("input", "continuous", ""),
+        Causality::Output => ("output", "continuous", " initial=\"calculated\""),
+    };
+    let start = variable
+        .start
+        .map(|s| format!(" start=\"{}\"", number(s)))
+        .unwrap_or_default();
+    format!(
+        "    <ScalarVariable name=\"{}\" valueReference=\"{}\" description=\"{}\" causality=\"{causality}\" variability=\"{variability}\"{initial}>\n      <Real unit=\"{}\"{start}/>\n    </ScalarVariable>\n",
+        escape(&variable.name),
+        variable.value_reference,
+        escape(&variable.description),
+        escape(variable.unit),
+    )
+}
+
+/// A 128-bit FNV-1a hash of the text, as an FMI GUID.
+fn guid(text: &str) -> String {
+    let hash = |seed: u64| {
+        text.bytes().fold(seed, |h, b| {
+            (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+        })
+    };
+    let (a, b) = (hash(0xcbf2_9ce4_8422_2325), hash(0x84222325cbf29ce4));
+    format!(
+        "{{{:08x}-{:04x}-{:04x}-{:04x}-{:012x}}}",
+        a >> 32,
+        (a >> 16) & 0xffff,
+        a & 0xffff,
+        b >> 48,
+        b & 0xffff_ffff_ffff
+    )
+}
+
+/// The complete `modelDescription.xml`.
+pub fn model_description(model: &Model, scenario: &Scenario, capabilities: Capabilities) -> String {
+    let variables = variables(model, scenario);
+    let mut used: Vec<&str> = variables.iter().map(|v| v.unit).collect();
+    used.sort_unstable();
+    used.dedup();
+    let mut body = unit_definitions(&used);
+    body.push_str(&format!(
+        "  <DefaultExperiment startTime=\"0.0\" stopTime=\"{}\" tolerance=\"{}\" stepSize=\"{}\"/>\n",
+        number(scenario.duration),
+        number(scenario.solver.rtol),
+        number(1.0 / scenario.sample_rate)
+    ));
+    body.push_str("  <ModelVariables>\n");
+    for variable in &variables {
+        body.push_str(&scalar_variable(variable));
+    }
+    body.push_str("  </ModelVariables>\n  <ModelStructure>\n    <Outputs>\n");
+    let outputs: Vec<usize> = variables
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| v.causality == Causality::Output)
+        .map(|(i, _)| i + 1)
+        .collect();
+    for index in &outputs {
+        body.push_str(&format!("      <Unknown index=\"{index}\"/>\n"));
+    }
+    body.push_str("    </Outputs>\n    <InitialUnknowns>\n");
+    for index in &outputs {
+        body.push_str(&format!("      <Unknown index=\"{index}\"/>\n"));
+    }
+    body.push_str("    </InitialUnknowns>\n  </ModelStructure>\n");
+    let flag = |b: bool| if b { "true" } else { "false" };
+    let title = if scenario.title.is_empty() {
+        model.name.clone()
+    } else {
+        scenario.title.clone()
+    };
+    let head = format!(
+        "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"{}\" description=\"{}\" generationTool=\"fistage {}\" variableNamingConvention=\"structured\" numberOfEventIndicators=\"0\"",
+        escape(&model.name),
+        escape(&title),
+        env!("CARGO_PKG_VERSION"),
+    );
+    let cosimulation = format!(
+        "  <CoSimulation modelIdentifier=\"{MODEL_IDENTIFIER}\" needsExecutionTool=\"false\" canHandleVariableCommunicationStepSize=\"true\" canInterpolateInputs=\"false\" maxOutputDerivativeOrder=\"0\" canRunAsynchronuously=\"false\" canBeInstantiatedOnlyOncePerProcess=\"false\" canNotUseMemoryManagementFunctions=\"true\" canGetAndSetFMUstate=\"{}\" canSerializeFMUstate=\"{}\" providesDirectionalDerivative=\"{}\"/>\n",
+        flag(capabilities.fmu_state),
+        flag(capabilities.fmu_state),
+        flag(capabilities.directional_derivatives),
+    );
+    let identity = guid(&format!("{head}{cosimulation}{body}"));
+    format!(
+        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n{head} guid=\"{identity}\">\n{cosimulation}{body}</fmiModelDescription>\n"
+    )
+}
