@@ -15,7 +15,7 @@ use std::fmt::Write as _;
 use serde::{Deserialize, Serialize};
 
 use crate::frf::{FrfData, FrfFit, FrfResiduals};
-use crate::stribeck::{AsymmetricFit, AsymmetryTestKind, Loss, StribeckData, StribeckFit};
+use crate::stribeck::{AsymmetricFit, AsymmetryTest, Loss, StribeckData, StribeckFit};
 use crate::uncertainty::{Estimate, ResidualStats};
 
 /// The default name of the friction element an override applies to.
@@ -79,18 +79,9 @@ pub struct AsymmetryReport {
     pub positive: BranchReport,
     /// Fit of the branch v < 0 (magnitudes).
     pub negative: BranchReport,
-    /// `F` or `Wald`.
-    pub test: AsymmetryTestKind,
-    /// Test statistic.
-    pub statistic: f64,
-    /// Degrees of freedom of the test.
-    pub dof: Vec<usize>,
-    /// p-value.
-    pub p_value: f64,
-    /// Significance level.
-    pub alpha: f64,
-    /// Whether the branches differ significantly.
-    pub significant: bool,
+    /// The test between the branches (its fields appear flat in the JSON).
+    #[serde(flatten)]
+    pub test: AsymmetryTest,
 }
 
 /// The JSON report of `fistage identify stribeck`.
@@ -131,12 +122,7 @@ impl StribeckReport {
         let asymmetry = asymmetric.map(|a| AsymmetryReport {
             positive: BranchReport::new(&a.positive),
             negative: BranchReport::new(&a.negative),
-            test: a.test.test,
-            statistic: a.test.statistic,
-            dof: a.test.dof.clone(),
-            p_value: a.test.p_value,
-            alpha: a.test.alpha,
-            significant: a.test.significant,
+            test: a.test.clone(),
         });
         Self {
             kind: "stribeck".to_string(),
@@ -192,18 +178,19 @@ impl StribeckReport {
             ] {
                 let _ = writeln!(out, "{name:<8} {:>26} {:>26}", value_ci(pos), value_ci(neg));
             }
-            let dof: Vec<String> = a.dof.iter().map(|d| d.to_string()).collect();
+            let test = &a.test;
+            let dof: Vec<String> = test.dof.iter().map(|d| d.to_string()).collect();
             let _ = writeln!(
                 out,
                 "Asymmetry: {:?} test, statistic {} (dof {}), p = {:.3e}: {}",
-                a.test,
-                sig(a.statistic),
+                test.test,
+                sig(test.statistic),
                 dof.join(", "),
-                a.p_value,
-                if a.significant {
-                    format!("significant at {}", a.alpha)
+                test.p_value,
+                if test.significant {
+                    format!("significant at {}", test.alpha)
                 } else {
-                    format!("not significant at {}", a.alpha)
+                    format!("not significant at {}", test.alpha)
                 }
             );
         }
@@ -465,8 +452,12 @@ pub fn stribeck_override(element: &str, report: &StribeckReport) -> String {
         let _ = writeln!(
             out,
             "# Branches {} (p = {:.2e}); per branch (v > 0 | v < 0):",
-            if a.significant { "differ" } else { "agree" },
-            a.p_value
+            if a.test.significant {
+                "differ"
+            } else {
+                "agree"
+            },
+            a.test.p_value
         );
         for (name, pos, neg) in [
             ("f_c", &a.positive.f_c, &a.negative.f_c),
