@@ -112,6 +112,15 @@ pub fn model_description(model: &Model, scenario: &Scenario, capabilities: Capab
     used.sort_unstable();
     used.dedup();
     let mut body = unit_definitions(&used);
+    let mut categories = String::from("  <LogCategories>\n");
+    for (name, description) in crate::logger::LOG_CATEGORIES {
+        categories.push_str(&format!(
+            "    <Category name=\"{name}\" description=\"{}\"/>\n",
+            escape(description)
+        ));
+    }
+    categories.push_str("  </LogCategories>\n");
+    body.push_str(&categories);
     body.push_str(&format!(
         "  <DefaultExperiment startTime=\"0.0\" stopTime=\"{}\" tolerance=\"{}\" stepSize=\"{}\"/>\n",
         number(scenario.duration),

@@ -16,6 +16,24 @@ pub enum Causality {
     Output,
 }
 
+/// What a variable reads or writes in the model.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Binding {
+    /// Servo gain: 0 = k, 1 = c, 2 = k_i.
+    ControllerGain(usize),
+    /// A parameter of a named force element, as a scenario override would set it.
+    Element {
+        /// Element name (LuGre contact or isolator).
+        element: String,
+        /// Override key, e.g. `sigma0` or `k_x`.
+        key: &'static str,
+    },
+    /// Model input, index into [`Inputs::NAMES`].
+    Input(usize),
+    /// Model output signal, index into the model's signals.
+    Output(usize),
+}
+
 /// One real scalar variable.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Variable {
@@ -31,6 +49,8 @@ pub struct Variable {
     pub unit: &'static str,
     /// Human description.
     pub description: String,
+    /// What it reads or writes.
+    pub binding: Binding,
 }
 
 const LUGRE_UNITS: [&str; 6] = ["N/m", "N.s/m", "N.s/m", "N", "N", "m/s"];
@@ -49,6 +69,14 @@ const ISOLATOR_KEYS: [(&str, &str); 12] = [
     ("c_rz", "N.m.s/rad"),
 ];
 
+/// What each input does, in the order of [`Inputs::NAMES`].
+const INPUT_DESCRIPTIONS: [&str; 4] = [
+    "reference position offset, added to the scenario's reference profile; held over each communication step",
+    "reference velocity offset, added to the scenario's reference profile; held over each communication step",
+    "external servo force added to the actuator force (the whole force with zero gains); held over each communication step",
+    "counter-surface velocity along every contact axis; held over each communication step",
+];
+
 /// FMI unit name of a model signal unit.
 fn fmi_unit(unit: &'static str) -> &'static str {
     match unit {
@@ -60,7 +88,7 @@ fn fmi_unit(unit: &'static str) -> &'static str {
 /// Every variable of the unit for this model and scenario, in value-reference order.
 pub fn variables(model: &Model, scenario: &Scenario) -> Vec<Variable> {
     let mut list: Vec<Variable> = Vec::new();
-    let mut push = |name: String, causality, start, unit, description: String| {
+    let mut push = |name: String, causality, start, unit, description: String, binding| {
         let value_reference = list.len() as u32;
         list.push(Variable {
             name,
@@ -69,20 +97,25 @@ pub fn variables(model: &Model, scenario: &Scenario) -> Vec<Variable> {
             start,
             unit,
             description,
+            binding,
         });
     };
     if let Some(controller) = &model.controller {
-        for (key, value, unit, what) in [
+        for (index, (key, value, unit, what)) in [
             ("k", controller.k, "N/m", "proportional gain"),
             ("c", controller.c, "N.s/m", "derivative gain"),
             ("k_i", controller.k_i, "N/(m.s)", "integral gain"),
-        ] {
+        ]
+        .into_iter()
+        .enumerate()
+        {
             push(
                 format!("controller.{key}"),
                 Causality::Parameter,
                 Some(value),
                 unit,
                 format!("servo {what}"),
+                Binding::ControllerGain(index),
             );
         }
     }
@@ -98,6 +131,10 @@ pub fn variables(model: &Model, scenario: &Scenario) -> Vec<Variable> {
                 Some(value),
                 unit,
                 format!("LuGre {name} of {}", friction.name),
+                Binding::Element {
+                    element: friction.name.clone(),
+                    key: name,
+                },
             );
         }
     }
@@ -114,6 +151,10 @@ pub fn variables(model: &Model, scenario: &Scenario) -> Vec<Variable> {
                 Some(value),
                 unit,
                 format!("isolator {} {key}", isolator.name),
+                Binding::Element {
+                    element: isolator.name.clone(),
+                    key,
+                },
             );
         }
     }
@@ -127,22 +168,24 @@ pub fn variables(model: &Model, scenario: &Scenario) -> Vec<Variable> {
         defaults.servo_force,
         defaults.platform_velocity,
     ];
-    for ((name, unit), start) in Inputs::NAMES.iter().zip(input_starts) {
+    for (index, ((name, unit), start)) in Inputs::NAMES.iter().zip(input_starts).enumerate() {
         push(
             (*name).to_string(),
             Causality::Input,
             Some(start),
             unit,
-            format!("input {name}, held over each communication step"),
+            INPUT_DESCRIPTIONS[index].to_string(),
+            Binding::Input(index),
         );
     }
-    for signal in &model.signals {
+    for (index, signal) in model.signals.iter().enumerate() {
         push(
             signal.name.clone(),
             Causality::Output,
             None,
             fmi_unit(signal.unit),
             format!("output {}", signal.name),
+            Binding::Output(index),
         );
     }
     list

@@ -3,6 +3,7 @@
 mod bench;
 mod check;
 mod figures;
+mod fmu;
 mod identify;
 mod lyapunov;
 mod modes;
@@ -39,6 +40,8 @@ enum Command {
     Lyapunov(lyapunov::LyapunovArgs),
     /// Identify LuGre parameters from measured stage data.
     Identify(identify::IdentifyArgs),
+    /// Package a scenario as an FMI 2.0 Co-Simulation FMU.
+    Fmu(fmu::FmuArgs),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -51,5 +54,6 @@ fn main() -> anyhow::Result<()> {
         Command::Modes(args) => modes::run(&args),
         Command::Sweep(args) => sweep::run(&args),
         Command::Lyapunov(args) => lyapunov::run(&args),
+        Command::Fmu(args) => fmu::run(&args),
     }
 }

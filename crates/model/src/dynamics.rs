@@ -222,10 +222,23 @@ impl Model {
 
     /// Writes every output signal (see [`Model::signals`]) at state x.
     pub fn outputs(&self, x: &[f64], inputs: &Inputs, out: &mut [f64], ws: &mut Workspace) {
-        self.evaluate(x, inputs, ws);
+        ws.elements.reference = inputs.reference;
+        self.outputs_of(x, &inputs.values(), out, ws);
+    }
+
+    /// [`Model::outputs`] in any scalar type: with dual numbers it gives exact
+    /// derivatives of the outputs (e.g. their direct dependence on the inputs).
+    pub fn outputs_of<S: Scalar>(
+        &self,
+        x: &[S],
+        inputs: &InputValues<S>,
+        out: &mut [S],
+        ws: &mut Workspace<S>,
+    ) {
+        self.evaluate_values(x, inputs, ws);
         let e = &ws.elements;
         let mut k = 0;
-        let mut put = |value: f64| {
+        let mut put = |value: S| {
             out[k] = value;
             k += 1;
         };
@@ -234,7 +247,7 @@ impl Model {
             put(*v);
         }
         if self.controller.is_some() {
-            put(e.reference.position);
+            put(inputs.reference_position);
             put(e.tracking_error);
         }
         for f in &e.actuator_force {

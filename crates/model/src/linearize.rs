@@ -76,6 +76,27 @@ impl Model {
         jacobian
     }
 
+    /// Directional derivative of every output (see [`Model::signals`]) at
+    /// state x along the input direction `direction` (one entry per input, in
+    /// the order of [`Inputs::NAMES`]), the state held fixed. Exact to round-off.
+    pub fn output_input_derivative(
+        &self,
+        x: &[f64],
+        inputs: &Inputs,
+        direction: &[f64; 4],
+    ) -> Vec<f64> {
+        let xd: Vec<Dual64> = x.iter().map(|v| Dual64::from_re(*v)).collect();
+        let mut u = inputs.values::<Dual64>();
+        u.reference_position.eps = direction[0];
+        u.reference_velocity.eps = direction[1];
+        u.servo_force.eps = direction[2];
+        u.platform_velocity.eps = direction[3];
+        let mut ws = self.workspace_of::<Dual64>();
+        let mut out = vec![Dual64::from_re(0.0); self.signals.len()];
+        self.outputs_of(&xd, &u, &mut out, &mut ws);
+        out.iter().map(|d| d.eps).collect()
+    }
+
     /// Tangent coordinates around state x.
     pub fn tangent(&self, x: &[f64]) -> Tangent {
         let n = self.n_states();

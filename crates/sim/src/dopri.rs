@@ -86,6 +86,19 @@ pub struct StepCounts {
     pub rhs_evaluations: u64,
 }
 
+/// Where an integration stands between steps: enough to resume it exactly.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Checkpoint {
+    /// Time.
+    pub t: f64,
+    /// State.
+    pub x: Vec<f64>,
+    /// Suggested next step.
+    pub h: f64,
+    /// Counters so far.
+    pub counts: StepCounts,
+}
+
 /// The integrator's state between steps, including the dense-output polynomial
 /// of the last accepted step.
 pub struct DormandPrince {
@@ -112,9 +125,16 @@ pub struct DormandPrince {
 impl DormandPrince {
     /// Starts at (t0, x0); evaluates f once and picks an initial step.
     pub fn new(system: &mut dyn OdeSystem, t0: f64, x0: &[f64], tol: Tolerances) -> Self {
-        let n = system.dim();
+        let mut integrator = Self::new_unstarted(system.dim(), t0, x0, tol);
+        system.rhs(t0, &integrator.x, &mut integrator.k[0]);
+        integrator.counts.rhs_evaluations += 1;
+        integrator.h = integrator.initial_step(system);
+        integrator
+    }
+
+    fn new_unstarted(n: usize, t0: f64, x0: &[f64], tol: Tolerances) -> Self {
         let zeros = || vec![0.0; n];
-        let mut integrator = Self {
+        Self {
             tol,
             n,
             t: t0,
@@ -137,11 +157,29 @@ impl DormandPrince {
             log_error_previous: 1e-4f64.ln(),
             counts: StepCounts::default(),
             non_finite: None,
-        };
-        system.rhs(t0, &integrator.x, &mut integrator.k[0]);
-        integrator.counts.rhs_evaluations += 1;
-        integrator.h = integrator.initial_step(system);
+        }
+    }
+
+    /// Resumes from a [`Checkpoint`]: evaluates f at its point and keeps its
+    /// step suggestion and counters. Resuming from the checkpoint of an
+    /// integrator that was then [`restart`](Self::restart)ed continues exactly
+    /// as that integrator does, bit for bit.
+    pub fn resume(system: &mut dyn OdeSystem, checkpoint: &Checkpoint, tol: Tolerances) -> Self {
+        let mut integrator = Self::new_unstarted(system.dim(), checkpoint.t, &checkpoint.x, tol);
+        integrator.h = checkpoint.h;
+        integrator.counts = checkpoint.counts;
+        integrator.restart(system);
         integrator
+    }
+
+    /// What is needed to resume: time, state, step suggestion, counters.
+    pub fn checkpoint(&self) -> Checkpoint {
+        Checkpoint {
+            t: self.t,
+            x: self.x.clone(),
+            h: self.h,
+            counts: self.counts,
+        }
     }
 
     /// Restarts at the current point (after a discontinuity in the inputs):
@@ -201,7 +239,8 @@ impl DormandPrince {
         loop {
             let remaining = t_stop - self.t;
             let mut h = self.h.min(self.tol.max_step);
-            if h >= remaining * (1.0 - 1e-12) {
+            let lands = h >= remaining * (1.0 - 1e-12);
+            if lands {
                 h = remaining;
             }
             let h_min = self.tol.min_step_relative * self.t.abs().max(1.0);
@@ -224,7 +263,16 @@ impl DormandPrince {
                 };
                 self.log_error_previous = error.max(1e-4).ln();
                 self.accept(h);
-                self.h = h * factor;
+                if lands {
+                    // Land on the stop time exactly, not on t + (t_stop - t).
+                    self.t = t_stop;
+                }
+                // A step cut short to land does not shrink the next one.
+                self.h = if lands {
+                    self.h.max(h * factor)
+                } else {
+                    h * factor
+                };
                 return Ok(());
             }
             self.counts.rejected += 1;

@@ -5,13 +5,15 @@
 //! [`Engine`], which returns a [`Trajectory`]; [`Trajectory::signals`] turns it
 //! into named output signals, [`metrics::summarize`] into statistics.
 
+pub mod cosim;
 pub mod dopri;
 pub mod engine;
 pub mod metrics;
 pub mod run;
 pub mod trajectory;
 
-pub use dopri::StepCounts;
+pub use cosim::{HeldInputs, Stepper, StepperTolerances};
+pub use dopri::{Checkpoint, StepCounts};
 pub use engine::{
     ENGINE_NAMES, Engine, Excitation, NativeEngine, ScenarioExcitation, SimError, SimSettings,
     engine_by_name, sample_times,

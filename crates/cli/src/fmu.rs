@@ -1,0 +1,67 @@
+//! `fistage fmu SCENARIO -o stage.fmu`: package the scenario as an FMI 2.0
+//! Co-Simulation FMU (model description, shared library, resources).
+
+use std::path::PathBuf;
+
+use anyhow::{Context, bail};
+use fistage_fmi::package::{LIBRARY_FILE, default_library_locations};
+
+/// Arguments of `fistage fmu`.
+#[derive(clap::Args)]
+pub struct FmuArgs {
+    /// Scenario file (TOML).
+    pub scenario: PathBuf,
+    /// Where to write the FMU.
+    #[arg(short = 'o', long = "output", default_value = "stage.fmu")]
+    pub output: PathBuf,
+    /// The shared library to package (default: `libfistage_fmi.so` beside this program,
+    /// as `cargo build -p fistage-fmi` places it).
+    #[arg(long)]
+    pub library: Option<PathBuf>,
+}
+
+fn find_library(args: &FmuArgs) -> anyhow::Result<PathBuf> {
+    if let Some(library) = &args.library {
+        if !library.is_file() {
+            bail!("--library {}: no such file", library.display());
+        }
+        return Ok(library.clone());
+    }
+    let program = std::env::current_exe().context("cannot locate this program")?;
+    let candidates = default_library_locations(&program);
+    candidates
+        .iter()
+        .find(|path| path.is_file())
+        .cloned()
+        .with_context(|| {
+            format!(
+                "{LIBRARY_FILE} not found (looked in {}); build it with `cargo build --release -p fistage-fmi` or name it with --library",
+                candidates
+                    .iter()
+                    .map(|p| p.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        })
+}
+
+/// Runs the command.
+pub fn run(args: &FmuArgs) -> anyhow::Result<()> {
+    let library = find_library(args)?;
+    let bytes = fistage_fmi::build_fmu(&args.scenario, &library)?;
+    if let Some(folder) = args.output.parent()
+        && !folder.as_os_str().is_empty()
+    {
+        std::fs::create_dir_all(folder)
+            .with_context(|| format!("cannot create {}", folder.display()))?;
+    }
+    std::fs::write(&args.output, &bytes)
+        .with_context(|| format!("cannot write {}", args.output.display()))?;
+    println!(
+        "{}: FMI 2.0 Co-Simulation FMU, {:.1} MB (library {})",
+        args.output.display(),
+        bytes.len() as f64 / 1e6,
+        library.display()
+    );
+    Ok(())
+}

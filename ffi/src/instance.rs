@@ -1,0 +1,694 @@
+//! One co-simulation instance in safe Rust: the FMI 2.0 Co-Simulation state
+//! machine, parameter and input values by value reference, stepping with the
+//! native engine between communication points, FMU state snapshots and their
+//! byte form, and directional derivatives of the outputs. The C ABI in
+//! [`crate::exports`] is a thin face over this type.
+
+use std::path::Path;
+
+use fistage_model::{Inputs, LoadError, Model, RobotSpec, Scenario, Workspace, assemble};
+use fistage_sim::{Checkpoint, Excitation, HeldInputs, Stepper, StepperTolerances, initial_state};
+use thiserror::Error;
+
+use crate::model_description::{Capabilities, model_description};
+use crate::variables::{Binding, Causality, Variable, variables};
+
+/// What the unit offers importers.
+pub const CAPABILITIES: Capabilities = Capabilities {
+    fmu_state: true,
+    directional_derivatives: true,
+};
+
+/// Largest number of internal steps in one communication step.
+const MAX_STEPS_PER_COMMUNICATION_STEP: u64 = 5_000_000;
+
+/// Where an instance is in the FMI 2.0 Co-Simulation state machine.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Phase {
+    /// After fmi2Instantiate or fmi2Reset: parameters and inputs may be set.
+    Instantiated,
+    /// Between fmi2EnterInitializationMode and fmi2ExitInitializationMode.
+    Initialization,
+    /// Ready for fmi2DoStep.
+    StepComplete,
+    /// The last fmi2DoStep failed; the state may be restored or the instance reset.
+    StepFailed,
+    /// After fmi2Terminate: results may be read.
+    Terminated,
+    /// An internal error made the instance unusable; only fmi2FreeInstance helps.
+    Fatal,
+}
+
+impl Phase {
+    fn name(self) -> &'static str {
+        match self {
+            Phase::Instantiated => "instantiated",
+            Phase::Initialization => "initialization mode",
+            Phase::StepComplete => "step complete",
+            Phase::StepFailed => "step failed",
+            Phase::Terminated => "terminated",
+            Phase::Fatal => "fatal error",
+        }
+    }
+
+    pub(crate) fn code(self) -> u8 {
+        self as u8
+    }
+
+    pub(crate) fn from_code(code: u8) -> Option<Self> {
+        [
+            Phase::Instantiated,
+            Phase::Initialization,
+            Phase::StepComplete,
+            Phase::StepFailed,
+            Phase::Terminated,
+            Phase::Fatal,
+        ]
+        .into_iter()
+        .find(|p| p.code() == code)
+    }
+}
+
+/// Why a call was refused. Every variant maps to fmi2Error.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum CallError {
+    /// The call is not allowed in the current phase.
+    #[error("{call} is not allowed in the {} state", .phase.name())]
+    WrongPhase {
+        /// The FMI function.
+        call: &'static str,
+        /// Current phase.
+        phase: Phase,
+    },
+    /// A value reference that names no variable of this unit.
+    #[error("unknown value reference {0}")]
+    UnknownValueReference(u32),
+    /// A variable that cannot be set now, or not at all.
+    #[error("cannot set \"{name}\": {why}")]
+    NotSettable {
+        /// Variable name.
+        name: String,
+        /// Reason.
+        why: String,
+    },
+    /// An argument out of range.
+    #[error("{0}")]
+    InvalidArgument(String),
+    /// Loading or assembling the model failed.
+    #[error("{0}")]
+    Model(String),
+    /// The integration failed.
+    #[error("{0}")]
+    Simulation(String),
+    /// The unit does not implement this optional function.
+    #[error("{0}")]
+    Unsupported(String),
+}
+
+/// The study an instance was made from, before any parameter change.
+#[derive(Debug, Clone)]
+struct Source {
+    scenario: Scenario,
+    robot: RobotSpec,
+}
+
+/// Everything that changes while an instance runs; an FMU state is a copy of it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Snapshot {
+    pub(crate) phase: Phase,
+    pub(crate) values: Vec<f64>,
+    pub(crate) start_time: f64,
+    pub(crate) stop_time: Option<f64>,
+    pub(crate) tolerance: Option<f64>,
+    pub(crate) checkpoint: Option<Checkpoint>,
+}
+
+/// A co-simulation instance.
+pub struct Instance {
+    source: Source,
+    variables: Vec<Variable>,
+    guid: String,
+    model: Model,
+    /// Parameter and input values, by value reference (output entries unused).
+    values: Vec<f64>,
+    /// The values `model` was built with.
+    model_values: Vec<f64>,
+    phase: Phase,
+    start_time: f64,
+    stop_time: Option<f64>,
+    tolerance: Option<f64>,
+    stepper: Option<Stepper>,
+    /// Initial state while in initialization mode (before the stepper exists).
+    initial: Option<Vec<f64>>,
+    outputs: Vec<f64>,
+    outputs_valid: bool,
+    workspace: Workspace,
+}
+
+impl std::fmt::Debug for Instance {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Instance")
+            .field("model", &self.model.name)
+            .field("phase", &self.phase)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Reads `scenario.toml` and the robot file it names from a resource folder.
+fn load_source(resources: &Path) -> Result<Source, LoadError> {
+    let scenario = Scenario::from_file(&resources.join(crate::package::SCENARIO_FILE))?;
+    let robot = RobotSpec::from_file(&scenario.robot)?;
+    Ok(Source { scenario, robot })
+}
+
+fn start_values(variables: &[Variable]) -> Vec<f64> {
+    variables.iter().map(|v| v.start.unwrap_or(0.0)).collect()
+}
+
+impl Instance {
+    /// An instance of the unit whose resources are in `resources`. When `guid` is
+    /// given it must equal the GUID of the description those resources produce.
+    pub fn new(resources: &Path, guid: Option<&str>) -> Result<Self, CallError> {
+        let source = load_source(resources).map_err(|e| CallError::Model(e.to_string()))?;
+        let (_, model) = assemble(source.robot.clone(), &source.scenario)
+            .map_err(|e| CallError::Model(e.to_string()))?;
+        let description = model_description(&model, &source.scenario, CAPABILITIES);
+        let own_guid = description_guid(&description);
+        if let Some(expected) = guid
+            && expected != own_guid
+        {
+            return Err(CallError::InvalidArgument(format!(
+                "GUID {expected} does not match this unit's resources ({own_guid}); the FMU was modified or mixed up"
+            )));
+        }
+        let variables = variables(&model, &source.scenario);
+        let values = start_values(&variables);
+        let n_outputs = model.signals.len();
+        Ok(Self {
+            workspace: model.workspace(),
+            guid: own_guid,
+            model_values: values.clone(),
+            values,
+            variables,
+            model,
+            source,
+            phase: Phase::Instantiated,
+            start_time: 0.0,
+            stop_time: None,
+            tolerance: None,
+            stepper: None,
+            initial: None,
+            outputs: vec![0.0; n_outputs],
+            outputs_valid: false,
+        })
+    }
+
+    /// The GUID of this unit's model description.
+    pub fn guid(&self) -> &str {
+        &self.guid
+    }
+
+    /// Current phase.
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
+    /// Marks the instance unusable (after an internal error).
+    pub fn poison(&mut self) {
+        self.phase = Phase::Fatal;
+    }
+
+    /// The variables, in value-reference order.
+    pub fn variables(&self) -> &[Variable] {
+        &self.variables
+    }
+
+    /// Current time: the last communication point reached.
+    pub fn time(&self) -> f64 {
+        self.stepper
+            .as_ref()
+            .map(Stepper::time)
+            .unwrap_or(self.start_time)
+    }
+
+    fn require(&self, call: &'static str, allowed: &[Phase]) -> Result<(), CallError> {
+        if allowed.contains(&self.phase) {
+            Ok(())
+        } else {
+            Err(CallError::WrongPhase {
+                call,
+                phase: self.phase,
+            })
+        }
+    }
+
+    /// fmi2SetupExperiment.
+    pub fn setup_experiment(
+        &mut self,
+        tolerance: Option<f64>,
+        start_time: f64,
+        stop_time: Option<f64>,
+    ) -> Result<(), CallError> {
+        self.require("fmi2SetupExperiment", &[Phase::Instantiated])?;
+        if !start_time.is_finite() {
+            return Err(CallError::InvalidArgument(format!(
+                "startTime must be finite, got {start_time}"
+            )));
+        }
+        if let Some(stop) = stop_time
+            && !(stop.is_finite() && stop >= start_time)
+        {
+            return Err(CallError::InvalidArgument(format!(
+                "stopTime {stop} is before startTime {start_time}"
+            )));
+        }
+        if let Some(rtol) = tolerance
+            && !(rtol.is_finite() && rtol > 0.0 && rtol < 1.0)
+        {
+            return Err(CallError::InvalidArgument(format!(
+                "tolerance must be in (0, 1), got {rtol}"
+            )));
+        }
+        self.start_time = start_time;
+        self.stop_time = stop_time;
+        self.tolerance = tolerance;
+        Ok(())
+    }
+
+    /// fmi2EnterInitializationMode.
+    pub fn enter_initialization(&mut self) -> Result<(), CallError> {
+        self.require("fmi2EnterInitializationMode", &[Phase::Instantiated])?;
+        self.phase = Phase::Initialization;
+        self.initial = None;
+        self.outputs_valid = false;
+        Ok(())
+    }
+
+    /// fmi2ExitInitializationMode: builds the model with the parameters set
+    /// and computes the scenario's initial state.
+    pub fn exit_initialization(&mut self) -> Result<(), CallError> {
+        self.require("fmi2ExitInitializationMode", &[Phase::Initialization])?;
+        let x0 = self.initial_state()?;
+        let rtol = self.tolerance.unwrap_or(self.source.scenario.solver.rtol);
+        let solver = &self.source.scenario.solver;
+        self.stepper = Some(Stepper::new(
+            self.start_time,
+            x0,
+            StepperTolerances {
+                rtol,
+                atol_scale: solver.atol_scale,
+                max_step: solver.max_step,
+                max_steps_per_advance: MAX_STEPS_PER_COMMUNICATION_STEP,
+            },
+        ));
+        self.initial = None;
+        self.outputs_valid = false;
+        self.phase = Phase::StepComplete;
+        Ok(())
+    }
+
+    /// fmi2Terminate.
+    pub fn terminate(&mut self) -> Result<(), CallError> {
+        self.require(
+            "fmi2Terminate",
+            &[
+                Phase::StepComplete,
+                Phase::StepFailed,
+                Phase::Initialization,
+            ],
+        )?;
+        self.phase = Phase::Terminated;
+        Ok(())
+    }
+
+    /// fmi2Reset: back to the state after instantiation, start values restored.
+    pub fn reset(&mut self) -> Result<(), CallError> {
+        if self.phase == Phase::Fatal {
+            return Err(CallError::WrongPhase {
+                call: "fmi2Reset",
+                phase: self.phase,
+            });
+        }
+        self.values = start_values(&self.variables);
+        self.phase = Phase::Instantiated;
+        self.start_time = 0.0;
+        self.stop_time = None;
+        self.tolerance = None;
+        self.stepper = None;
+        self.initial = None;
+        self.outputs_valid = false;
+        Ok(())
+    }
+
+    fn variable(&self, vr: u32) -> Result<&Variable, CallError> {
+        self.variables
+            .get(vr as usize)
+            .ok_or(CallError::UnknownValueReference(vr))
+    }
+
+    /// Rebuilds the model when parameters changed since it was built.
+    fn rebuild_model(&mut self) -> Result<(), CallError> {
+        if self.values == self.model_values {
+            return Ok(());
+        }
+        let mut scenario = self.source.scenario.clone();
+        for variable in &self.variables {
+            let value = self.values[variable.value_reference as usize];
+            match &variable.binding {
+                Binding::ControllerGain(index) => {
+                    if let Some(controller) = scenario.controller.as_mut() {
+                        *[&mut controller.k, &mut controller.c, &mut controller.k_i][*index] =
+                            value;
+                    }
+                }
+                Binding::Element { element, key } => {
+                    scenario.overrides.push(fistage_model::Override {
+                        target: element.clone(),
+                        key: (*key).to_string(),
+                        value,
+                    });
+                }
+                Binding::Input(_) | Binding::Output(_) => {}
+            }
+        }
+        let (_, model) = assemble(self.source.robot.clone(), &scenario)
+            .map_err(|e| CallError::Model(format!("parameters rejected: {e}")))?;
+        self.model = model;
+        self.workspace = self.model.workspace();
+        self.model_values = self.values.clone();
+        Ok(())
+    }
+
+    fn held_inputs(&self) -> HeldInputs {
+        let mut held = Inputs::default();
+        for variable in &self.variables {
+            if let Binding::Input(index) = variable.binding {
+                let value = self.values[variable.value_reference as usize];
+                match index {
+                    0 => held.reference.position = value,
+                    1 => held.reference.velocity = value,
+                    2 => held.servo_force = value,
+                    _ => held.platform_velocity = value,
+                }
+            }
+        }
+        HeldInputs {
+            profile: self.source.scenario.reference.clone(),
+            held,
+        }
+    }
+
+    fn initial_state(&mut self) -> Result<Vec<f64>, CallError> {
+        self.rebuild_model()?;
+        let mut scenario = self.source.scenario.clone();
+        scenario.platform_velocity = self.held_inputs().held.platform_velocity;
+        initial_state(&self.model, &scenario).map_err(|e| CallError::Model(e.to_string()))
+    }
+
+    /// The state the outputs are computed from.
+    fn current_state(&mut self) -> Result<&[f64], CallError> {
+        if self.stepper.is_none() && self.initial.is_none() {
+            self.initial = Some(self.initial_state()?);
+        }
+        match (&self.stepper, &self.initial) {
+            (Some(stepper), _) => Ok(stepper.state()),
+            (None, Some(x)) => Ok(x),
+            (None, None) => Err(CallError::InvalidArgument("no state yet".into())),
+        }
+    }
+
+    fn refresh_outputs(&mut self) -> Result<(), CallError> {
+        if self.outputs_valid {
+            return Ok(());
+        }
+        let x = self.current_state()?.to_vec();
+        let inputs = self.held_inputs().inputs(self.time());
+        self.model
+            .outputs(&x, &inputs, &mut self.outputs, &mut self.workspace);
+        if let Some(i) = self.outputs.iter().position(|v| !v.is_finite()) {
+            return Err(CallError::Simulation(format!(
+                "output \"{}\" is not finite",
+                self.model.signals[i].name
+            )));
+        }
+        self.outputs_valid = true;
+        Ok(())
+    }
+
+    /// fmi2GetReal.
+    pub fn get_real(&mut self, vrs: &[u32], values: &mut [f64]) -> Result<(), CallError> {
+        self.require(
+            "fmi2GetReal",
+            &[
+                Phase::Initialization,
+                Phase::StepComplete,
+                Phase::StepFailed,
+                Phase::Terminated,
+            ],
+        )?;
+        for (&vr, value) in vrs.iter().zip(values.iter_mut()) {
+            let binding = self.variable(vr)?.binding.clone();
+            *value = match binding {
+                Binding::Output(index) => {
+                    self.refresh_outputs()?;
+                    self.outputs[index]
+                }
+                _ => self.values[vr as usize],
+            };
+        }
+        Ok(())
+    }
+
+    /// fmi2SetReal. Parameters may be set until initialization ends, inputs any time before termination.
+    pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), CallError> {
+        self.require(
+            "fmi2SetReal",
+            &[
+                Phase::Instantiated,
+                Phase::Initialization,
+                Phase::StepComplete,
+                Phase::StepFailed,
+            ],
+        )?;
+        // Check everything first, so a refused call changes nothing.
+        for (&vr, &value) in vrs.iter().zip(values) {
+            let variable = self.variable(vr)?;
+            let refuse = |why: String| {
+                Err(CallError::NotSettable {
+                    name: variable.name.clone(),
+                    why,
+                })
+            };
+            match variable.causality {
+                Causality::Output => return refuse("it is an output".into()),
+                Causality::Parameter
+                    if !matches!(self.phase, Phase::Instantiated | Phase::Initialization) =>
+                {
+                    return refuse("parameters are fixed after fmi2ExitInitializationMode".into());
+                }
+                _ => {}
+            }
+            if !value.is_finite() {
+                return refuse(format!("{value} is not a finite number"));
+            }
+        }
+        for (&vr, &value) in vrs.iter().zip(values) {
+            if self.values[vr as usize] != value {
+                self.values[vr as usize] = value;
+                self.outputs_valid = false;
+                if self.variables[vr as usize].causality == Causality::Parameter
+                    || self.stepper.is_none()
+                {
+                    self.initial = None;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// fmi2DoStep: integrates from the current communication point over `step`.
+    pub fn do_step(&mut self, communication_point: f64, step: f64) -> Result<(), CallError> {
+        self.require("fmi2DoStep", &[Phase::StepComplete])?;
+        if !(step.is_finite() && step > 0.0) {
+            return Err(CallError::InvalidArgument(format!(
+                "communicationStepSize must be a positive number, got {step}"
+            )));
+        }
+        let now = self.time();
+        if !communication_point.is_finite()
+            || (communication_point - now).abs() > 1e-9 * now.abs().max(1.0)
+        {
+            return Err(CallError::InvalidArgument(format!(
+                "currentCommunicationPoint {communication_point} is not the unit's time {now}"
+            )));
+        }
+        let target = communication_point + step;
+        if let Some(stop) = self.stop_time
+            && target > stop + 1e-9 * stop.abs().max(1.0)
+        {
+            return Err(CallError::InvalidArgument(format!(
+                "step to t = {target} s goes past stopTime {stop} s"
+            )));
+        }
+        let held = self.held_inputs();
+        let Some(stepper) = self.stepper.as_mut() else {
+            return Err(CallError::WrongPhase {
+                call: "fmi2DoStep",
+                phase: self.phase,
+            });
+        };
+        self.outputs_valid = false;
+        match stepper.advance(&self.model, &held, target, &mut self.workspace) {
+            Ok(()) => Ok(()),
+            Err(error) => {
+                self.phase = Phase::StepFailed;
+                Err(CallError::Simulation(format!("fmi2DoStep failed: {error}")))
+            }
+        }
+    }
+
+    /// Counters of the internal integration: (accepted steps, rejected steps, RHS evaluations).
+    pub fn step_counts(&self) -> (u64, u64, u64) {
+        self.stepper
+            .as_ref()
+            .map(|s| {
+                let c = s.checkpoint().counts;
+                (c.steps, c.rejected, c.rhs_evaluations)
+            })
+            .unwrap_or_default()
+    }
+
+    /// fmi2GetFMUstate.
+    pub fn snapshot(&self) -> Snapshot {
+        Snapshot {
+            phase: self.phase,
+            values: self.values.clone(),
+            start_time: self.start_time,
+            stop_time: self.stop_time,
+            tolerance: self.tolerance,
+            checkpoint: self.stepper.as_ref().map(|s| s.checkpoint().clone()),
+        }
+    }
+
+    /// fmi2SetFMUstate.
+    pub fn restore(&mut self, snapshot: &Snapshot) -> Result<(), CallError> {
+        if self.phase == Phase::Fatal {
+            return Err(CallError::WrongPhase {
+                call: "fmi2SetFMUstate",
+                phase: self.phase,
+            });
+        }
+        if snapshot.values.len() != self.values.len()
+            || snapshot
+                .checkpoint
+                .as_ref()
+                .is_some_and(|c| c.x.len() != self.model.n_states())
+        {
+            return Err(CallError::InvalidArgument(
+                "the FMU state belongs to a different unit".into(),
+            ));
+        }
+        let previous = (self.values.clone(), self.phase);
+        self.values = snapshot.values.clone();
+        if let Err(error) = self.rebuild_model() {
+            (self.values, self.phase) = previous;
+            return Err(error);
+        }
+        self.phase = snapshot.phase;
+        self.start_time = snapshot.start_time;
+        self.stop_time = snapshot.stop_time;
+        self.tolerance = snapshot.tolerance;
+        self.initial = None;
+        self.outputs_valid = false;
+        match (&snapshot.checkpoint, self.stepper.as_mut()) {
+            (Some(checkpoint), Some(stepper)) => stepper.restore(checkpoint.clone()),
+            (Some(checkpoint), None) => {
+                let solver = &self.source.scenario.solver;
+                let mut stepper = Stepper::new(
+                    checkpoint.t,
+                    checkpoint.x.clone(),
+                    StepperTolerances {
+                        rtol: self.tolerance.unwrap_or(solver.rtol),
+                        atol_scale: solver.atol_scale,
+                        max_step: solver.max_step,
+                        max_steps_per_advance: MAX_STEPS_PER_COMMUNICATION_STEP,
+                    },
+                );
+                stepper.restore(checkpoint.clone());
+                self.stepper = Some(stepper);
+            }
+            (None, _) => self.stepper = None,
+        }
+        Ok(())
+    }
+
+    /// fmi2SerializeFMUstate: the snapshot as bytes, tagged with this unit's GUID.
+    pub fn serialize(&self, snapshot: &Snapshot) -> Vec<u8> {
+        crate::state::encode(&self.guid, snapshot)
+    }
+
+    /// fmi2DeSerializeFMUstate.
+    pub fn deserialize(&self, bytes: &[u8]) -> Result<Snapshot, CallError> {
+        crate::state::decode(&self.guid, bytes).map_err(CallError::InvalidArgument)
+    }
+
+    /// fmi2GetDirectionalDerivative: outputs (unknowns) along a direction of
+    /// the inputs (knowns), the state held fixed, exact by dual numbers.
+    pub fn directional_derivative(
+        &mut self,
+        unknowns: &[u32],
+        knowns: &[u32],
+        seed: &[f64],
+        result: &mut [f64],
+    ) -> Result<(), CallError> {
+        self.require(
+            "fmi2GetDirectionalDerivative",
+            &[
+                Phase::Initialization,
+                Phase::StepComplete,
+                Phase::StepFailed,
+                Phase::Terminated,
+            ],
+        )?;
+        let mut direction = [0.0; 4];
+        for (&vr, &dv) in knowns.iter().zip(seed) {
+            match self.variable(vr)?.binding {
+                Binding::Input(index) => direction[index] += dv,
+                _ => {
+                    return Err(CallError::InvalidArgument(format!(
+                        "known \"{}\" is not an input",
+                        self.variables[vr as usize].name
+                    )));
+                }
+            }
+        }
+        let mut rows = Vec::with_capacity(unknowns.len());
+        for &vr in unknowns {
+            match self.variable(vr)?.binding {
+                Binding::Output(index) => rows.push(index),
+                _ => {
+                    return Err(CallError::InvalidArgument(format!(
+                        "unknown \"{}\" is not an output",
+                        self.variables[vr as usize].name
+                    )));
+                }
+            }
+        }
+        let x = self.current_state()?.to_vec();
+        let inputs = self.held_inputs().inputs(self.time());
+        let derivative = self.model.output_input_derivative(&x, &inputs, &direction);
+        for (slot, index) in result.iter_mut().zip(rows) {
+            *slot = derivative[index];
+        }
+        Ok(())
+    }
+}
+
+/// The `guid="..."` attribute of a model description.
+fn description_guid(description: &str) -> String {
+    description
+        .split_once("guid=\"")
+        .and_then(|(_, rest)| rest.split_once('"'))
+        .map(|(guid, _)| guid.to_string())
+        .unwrap_or_default()
+}

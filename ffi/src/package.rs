@@ -1,0 +1,152 @@
+//! Packaging a scenario as an `.fmu` archive: `modelDescription.xml`,
+//! `binaries/linux64/fistage_stage.so` and `resources/` holding the scenario
+//! (its robot path rewritten to the copy beside it) and the robot file, plus
+//! a reference CSV when the scenario uses one. The description is generated
+//! from the packaged resources themselves, so the GUID an instance computes
+//! at fmi2Instantiate is the one in the archive.
+
+use std::path::{Path, PathBuf};
+
+use thiserror::Error;
+
+use crate::instance::{CAPABILITIES, Instance};
+use crate::model_description::{MODEL_IDENTIFIER, model_description};
+use crate::zip::ZipWriter;
+
+/// The scenario's name inside `resources/`.
+pub const SCENARIO_FILE: &str = "scenario.toml";
+/// The robot's name inside `resources/`.
+pub const ROBOT_FILE: &str = "robot.urdf";
+/// A CSV reference's name inside `resources/`.
+pub const REFERENCE_FILE: &str = "reference.csv";
+/// The shared library's file name as the cdylib build writes it.
+pub const LIBRARY_FILE: &str = "libfistage_fmi.so";
+
+/// Why an FMU could not be built.
+#[derive(Debug, Error)]
+pub enum PackageError {
+    /// A file could not be read or written.
+    #[error("{file}: {reason}")]
+    Io {
+        /// The file.
+        file: PathBuf,
+        /// What went wrong.
+        reason: std::io::Error,
+    },
+    /// The scenario or robot is invalid.
+    #[error(transparent)]
+    Load(#[from] fistage_model::LoadError),
+    /// The scenario file is not valid TOML.
+    #[error("{file}: {reason}")]
+    Scenario {
+        /// The scenario file.
+        file: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+    /// The packaged resources do not load as an instance.
+    #[error("the packaged resources do not load: {0}")]
+    Resources(String),
+}
+
+fn read(file: &Path) -> Result<Vec<u8>, PackageError> {
+    std::fs::read(file).map_err(|reason| PackageError::Io {
+        file: file.to_path_buf(),
+        reason,
+    })
+}
+
+fn write(file: &Path, bytes: &[u8]) -> Result<(), PackageError> {
+    std::fs::write(file, bytes).map_err(|reason| PackageError::Io {
+        file: file.to_path_buf(),
+        reason,
+    })
+}
+
+/// The files of `resources/`: the rewritten scenario, the robot and any reference CSV.
+fn resource_files(scenario_path: &Path) -> Result<Vec<(&'static str, Vec<u8>)>, PackageError> {
+    let scenario = fistage_model::Scenario::from_file(scenario_path)?;
+    let text = String::from_utf8_lossy(&read(scenario_path)?).into_owned();
+    let bad = |reason: String| PackageError::Scenario {
+        file: scenario_path.to_path_buf(),
+        reason,
+    };
+    let mut table: toml::Table = text
+        .parse()
+        .map_err(|e: toml::de::Error| bad(e.to_string()))?;
+    table.insert("robot".into(), toml::Value::String(ROBOT_FILE.into()));
+    let mut files = vec![(ROBOT_FILE, read(&scenario.robot)?)];
+    if let Some(reference) = table
+        .get_mut("reference")
+        .and_then(toml::Value::as_table_mut)
+        && let Some(file) = reference.get("file").and_then(toml::Value::as_str)
+    {
+        let base = scenario_path.parent().unwrap_or(Path::new(""));
+        files.push((REFERENCE_FILE, read(&base.join(file))?));
+        reference.insert("file".into(), toml::Value::String(REFERENCE_FILE.into()));
+    }
+    let rewritten = toml::to_string(&table).map_err(|e| bad(e.to_string()))?;
+    files.insert(0, (SCENARIO_FILE, rewritten.into_bytes()));
+    Ok(files)
+}
+
+/// A scratch folder removed when dropped.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new() -> Result<Self, PackageError> {
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.as_nanos())
+            .unwrap_or_default();
+        let dir = std::env::temp_dir().join(format!("fistage-fmu-{}-{nanos}", std::process::id()));
+        std::fs::create_dir_all(&dir).map_err(|reason| PackageError::Io {
+            file: dir.clone(),
+            reason,
+        })?;
+        Ok(Self(dir))
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// The bytes of an `.fmu` for the scenario, with `library` as its binary.
+pub fn build_fmu(scenario_path: &Path, library: &Path) -> Result<Vec<u8>, PackageError> {
+    let resources = resource_files(scenario_path)?;
+    let scratch = Scratch::new()?;
+    for (name, bytes) in &resources {
+        write(&scratch.0.join(name), bytes)?;
+    }
+    let instance =
+        Instance::new(&scratch.0, None).map_err(|e| PackageError::Resources(e.to_string()))?;
+    let loaded = fistage_model::load(&scratch.0.join(SCENARIO_FILE))?;
+    let description = model_description(&loaded.model, &loaded.scenario, CAPABILITIES);
+    debug_assert!(description.contains(instance.guid()));
+    let library_bytes = read(library)?;
+    let mut zip = ZipWriter::default();
+    zip.add("modelDescription.xml", description.as_bytes());
+    zip.add(
+        &format!("binaries/linux64/{MODEL_IDENTIFIER}.so"),
+        &library_bytes,
+    );
+    for (name, bytes) in &resources {
+        zip.add(&format!("resources/{name}"), bytes);
+    }
+    Ok(zip.finish())
+}
+
+/// Where the shared library is looked for when none is named: beside the
+/// running program (and in its `deps/` folder), as a cargo build places it.
+pub fn default_library_locations(program: &Path) -> Vec<PathBuf> {
+    let Some(folder) = program.parent() else {
+        return Vec::new();
+    };
+    vec![
+        folder.join(LIBRARY_FILE),
+        folder.join("deps").join(LIBRARY_FILE),
+    ]
+}
