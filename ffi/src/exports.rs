@@ -289,9 +289,10 @@ pub unsafe extern "C" fn fmi2Instantiate(
     fmuGUID: fmi2String,
     fmuResourceLocation: fmi2String,
     functions: *const fmi2CallbackFunctions,
-    _visible: fmi2Boolean,
+    visible: fmi2Boolean,
     loggingOn: fmi2Boolean,
 ) -> fmi2Component {
+    let _ = visible; // there is no window to show
     let name = text(instanceName).unwrap_or_default();
     // SAFETY: by the caller's guarantee.
     let logger = unsafe { Logger::new(functions, &name, loggingOn != 0) };
@@ -418,46 +419,113 @@ fn no_variables(vr: &[fmi2ValueReference], kind: &str) -> Result<Status, CallErr
     }
 }
 
-macro_rules! typeless_accessor {
-    ($(#[$doc:meta])* $name:ident, $value:ty, $kind:literal) => {
-        $(#[$doc])*
-        ///
-        /// # Safety
-        /// `vr` is null or points to `nvr` elements.
-        #[unsafe(no_mangle)]
-        pub unsafe extern "C" fn $name(
-            c: fmi2Component,
-            vr: *const fmi2ValueReference,
-            nvr: usize,
-            _value: $value,
-        ) -> fmi2Status {
-            with_slot(c, stringify!($name), |_| {
-                // SAFETY: by the caller's guarantee.
-                let vr = unsafe { input_slice(vr, nvr, "vr") }?;
-                no_variables(vr, $kind)
-            })
-        }
-    };
+/// Get and set for a type the unit has no variables of.
+///
+/// # Safety
+/// `vr` is null or points to `nvr` elements.
+unsafe fn typeless_call(
+    c: fmi2Component,
+    call: &'static str,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    kind: &str,
+) -> fmi2Status {
+    with_slot(c, call, |_| {
+        // SAFETY: by the caller's guarantee.
+        let vr = unsafe { input_slice(vr, nvr, "vr") }?;
+        no_variables(vr, kind)
+    })
 }
 
-typeless_accessor!(
-    /// fmi2GetInteger.
-    fmi2GetInteger, *mut fmi2Integer, "Integer");
-typeless_accessor!(
-    /// fmi2GetBoolean.
-    fmi2GetBoolean, *mut fmi2Boolean, "Boolean");
-typeless_accessor!(
-    /// fmi2GetString.
-    fmi2GetString, *mut fmi2String, "String");
-typeless_accessor!(
-    /// fmi2SetInteger.
-    fmi2SetInteger, *const fmi2Integer, "Integer");
-typeless_accessor!(
-    /// fmi2SetBoolean.
-    fmi2SetBoolean, *const fmi2Boolean, "Boolean");
-typeless_accessor!(
-    /// fmi2SetString.
-    fmi2SetString, *const fmi2String, "String");
+/// fmi2GetInteger: the unit has no Integer variables, so only an empty call succeeds.
+///
+/// # Safety
+/// `vr` is null or points to `nvr` elements.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetInteger(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    _value: *mut fmi2Integer,
+) -> fmi2Status {
+    // SAFETY: by the caller's guarantee.
+    unsafe { typeless_call(c, "fmi2GetInteger", vr, nvr, "Integer") }
+}
+
+/// fmi2GetBoolean: the unit has no Boolean variables, so only an empty call succeeds.
+///
+/// # Safety
+/// `vr` is null or points to `nvr` elements.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetBoolean(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    _value: *mut fmi2Boolean,
+) -> fmi2Status {
+    // SAFETY: by the caller's guarantee.
+    unsafe { typeless_call(c, "fmi2GetBoolean", vr, nvr, "Boolean") }
+}
+
+/// fmi2GetString: the unit has no String variables, so only an empty call succeeds.
+///
+/// # Safety
+/// `vr` is null or points to `nvr` elements.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetString(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    _value: *mut fmi2String,
+) -> fmi2Status {
+    // SAFETY: by the caller's guarantee.
+    unsafe { typeless_call(c, "fmi2GetString", vr, nvr, "String") }
+}
+
+/// fmi2SetInteger: the unit has no Integer variables, so only an empty call succeeds.
+///
+/// # Safety
+/// `vr` is null or points to `nvr` elements.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetInteger(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    _value: *const fmi2Integer,
+) -> fmi2Status {
+    // SAFETY: by the caller's guarantee.
+    unsafe { typeless_call(c, "fmi2SetInteger", vr, nvr, "Integer") }
+}
+
+/// fmi2SetBoolean: the unit has no Boolean variables, so only an empty call succeeds.
+///
+/// # Safety
+/// `vr` is null or points to `nvr` elements.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetBoolean(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    _value: *const fmi2Boolean,
+) -> fmi2Status {
+    // SAFETY: by the caller's guarantee.
+    unsafe { typeless_call(c, "fmi2SetBoolean", vr, nvr, "Boolean") }
+}
+
+/// fmi2SetString: the unit has no String variables, so only an empty call succeeds.
+///
+/// # Safety
+/// `vr` is null or points to `nvr` elements.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetString(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    _value: *const fmi2String,
+) -> fmi2Status {
+    // SAFETY: by the caller's guarantee.
+    unsafe { typeless_call(c, "fmi2SetString", vr, nvr, "String") }
+}
 
 /// fmi2SetReal. A refused call changes nothing.
 ///

@@ -19,6 +19,12 @@ pub const CAPABILITIES: Capabilities = Capabilities {
     directional_derivatives: true,
 };
 
+#[cfg(test)]
+thread_local! {
+    /// Test hook: the next fmi2DoStep on this thread panics inside the step.
+    pub(crate) static INJECT_PANIC: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
 /// Largest number of internal steps in one communication step.
 const MAX_STEPS_PER_COMMUNICATION_STEP: u64 = 5_000_000;
 
@@ -538,6 +544,10 @@ impl Instance {
             });
         };
         self.outputs_valid = false;
+        #[cfg(test)]
+        if INJECT_PANIC.with(|flag| flag.replace(false)) {
+            panic!("injected fault inside the model step");
+        }
         match stepper.advance(&self.model, &held, target, &mut self.workspace) {
             Ok(()) => Ok(()),
             Err(error) => {

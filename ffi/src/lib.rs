@@ -11,6 +11,8 @@
 pub mod exports;
 pub mod instance;
 mod logger;
+#[cfg(test)]
+mod misuse_tests;
 pub mod model_description;
 pub mod package;
 mod state;

@@ -114,6 +114,15 @@ impl Drop for Scratch {
     }
 }
 
+/// Writes the FMU's `resources/` files for a scenario into `folder` (which
+/// must exist): what an instance loads at fmi2Instantiate.
+pub fn write_resources(scenario_path: &Path, folder: &Path) -> Result<(), PackageError> {
+    for (name, bytes) in resource_files(scenario_path)? {
+        write(&folder.join(name), &bytes)?;
+    }
+    Ok(())
+}
+
 /// The bytes of an `.fmu` for the scenario, with `library` as its binary.
 pub fn build_fmu(scenario_path: &Path, library: &Path) -> Result<Vec<u8>, PackageError> {
     let resources = resource_files(scenario_path)?;

@@ -33,6 +33,24 @@ pub struct BenchArgs {
     /// Signal whose error is reported.
     #[arg(long, default_value = "encoder.position")]
     pub signal: String,
+    /// Time the FMI face only: fmi2DoStep from Rust and FMPy's simulate_fmu.
+    #[arg(long)]
+    pub fmu: bool,
+    /// Python with FMPy for the FMU table (default: the test environment's,
+    /// `target/fmi-venv/bin/python`, else `python3`).
+    #[arg(long)]
+    pub python: Option<PathBuf>,
+}
+
+fn fmu_python(args: &BenchArgs) -> PathBuf {
+    args.python.clone().unwrap_or_else(|| {
+        let venv = PathBuf::from("target/fmi-venv/bin/python");
+        if venv.is_file() {
+            venv
+        } else {
+            PathBuf::from("python3")
+        }
+    })
 }
 
 /// CPU time of the calling thread, s.
@@ -122,6 +140,9 @@ fn max_deviation(
 
 /// Runs the benchmark and prints Markdown.
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
+    if args.fmu {
+        return crate::bench_fmu::fmu_table(&fmu_python(args), args.repeat.min(5));
+    }
     match &args.scenario {
         Some(scenario) => {
             let rtol = if args.rtol.is_empty() {
@@ -144,7 +165,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                 &[1e-6, 1e-8],
             )?;
             println!();
-            ident_table(args.repeat)
+            ident_table(args.repeat)?;
+            println!();
+            crate::bench_fmu::fmu_table(&fmu_python(args), args.repeat.min(5))
         }
     }
 }

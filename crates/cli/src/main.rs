@@ -1,6 +1,7 @@
 //! The `fistage` command-line program: a thin face over the library crates.
 
 mod bench;
+mod bench_fmu;
 mod check;
 mod figures;
 mod fmu;

@@ -222,3 +222,55 @@ fn sweep_shards_merge_and_resume_to_the_same_table() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `fistage fmu` writes an archive with the description, the library and the
+/// resources; a bad scenario or a missing library is an error that names it.
+#[test]
+fn fmu_packages_a_scenario() {
+    let out = scratch("fmu");
+    let fmu = out.join("stage.fmu");
+    let result = fistage()
+        .arg("fmu")
+        .arg(repository().join("scenarios/coupling/symmetric_traverse.toml"))
+        .arg("-o")
+        .arg(&fmu)
+        .output()
+        .expect("fistage runs");
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let bytes = std::fs::read(&fmu).expect("FMU written");
+    assert_eq!(&bytes[..4], b"PK\x03\x04", "a ZIP archive");
+    let text = String::from_utf8_lossy(&bytes);
+    for entry in [
+        "modelDescription.xml",
+        "binaries/linux64/fistage_stage.so",
+        "resources/scenario.toml",
+        "resources/robot.urdf",
+    ] {
+        assert!(text.contains(entry), "{entry} in the archive");
+    }
+    let missing = fistage()
+        .arg("fmu")
+        .arg(repository().join("scenarios/coupling/symmetric_traverse.toml"))
+        .arg("--library")
+        .arg(out.join("nowhere.so"))
+        .arg("-o")
+        .arg(out.join("other.fmu"))
+        .output()
+        .expect("fistage runs");
+    assert!(!missing.status.success());
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("nowhere.so: no such file"));
+    let bad = fistage()
+        .arg("fmu")
+        .arg(out.join("absent.toml"))
+        .arg("-o")
+        .arg(out.join("other.fmu"))
+        .output()
+        .expect("fistage runs");
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("absent.toml"));
+    assert!(!out.join("other.fmu").exists(), "nothing written on error");
+}

@@ -1,0 +1,510 @@
+//! Misuse of the C functions never crashes the host: calls out of order, null
+//! pointers, unknown value references, bad step sizes, double frees, a panic
+//! inside the model, and a long generated sequence of random calls. Every
+//! refusal returns fmi2Error (or fmi2Fatal for the panic) and says why through
+//! the logger.
+//!
+//! The logger here is a plain `extern "C"` function called through the
+//! variadic logger pointer type: on x86-64 System V the fixed arguments of a
+//! variadic call are passed exactly as for a non-variadic one, and the unit
+//! never passes variadic arguments (it escapes `%`).
+
+use std::cell::RefCell;
+use std::ffi::{CStr, CString, c_char, c_int, c_void};
+use std::path::{Path, PathBuf};
+
+use rand::{Rng, SeedableRng};
+
+use crate::exports::*;
+use crate::instance::{INJECT_PANIC, Instance};
+use crate::types::{fmi2CallbackFunctions, fmi2CallbackLogger, fmi2Component, fmi2FMUstate};
+
+const OK: c_int = 0;
+const DISCARD: c_int = 2;
+const ERROR: c_int = 3;
+const FATAL: c_int = 4;
+
+/// Messages received: (status, category, message).
+type Log = RefCell<Vec<(c_int, String, String)>>;
+
+unsafe extern "C" fn record(
+    environment: *mut c_void,
+    _instance: *const c_char,
+    status: c_int,
+    category: *const c_char,
+    message: *const c_char,
+) {
+    // SAFETY: the environment is the `Log` of the test that made the instance;
+    // the strings are valid for the duration of the call.
+    unsafe {
+        let log = &*environment.cast::<Log>();
+        log.borrow_mut().push((
+            status,
+            CStr::from_ptr(category).to_string_lossy().into_owned(),
+            CStr::from_ptr(message).to_string_lossy().into_owned(),
+        ));
+    }
+}
+
+fn callbacks(log: &Log) -> fmi2CallbackFunctions {
+    type Plain =
+        unsafe extern "C" fn(*mut c_void, *const c_char, c_int, *const c_char, *const c_char);
+    type Variadic =
+        unsafe extern "C" fn(*mut c_void, *const c_char, c_int, *const c_char, *const c_char, ...);
+    // SAFETY: see the module documentation (fixed arguments only, x86-64 System V).
+    let logger: fmi2CallbackLogger =
+        Some(unsafe { std::mem::transmute::<Plain, Variadic>(record as Plain) });
+    fmi2CallbackFunctions {
+        logger,
+        allocateMemory: None,
+        freeMemory: None,
+        stepFinished: None,
+        componentEnvironment: std::ptr::from_ref(log).cast_mut().cast(),
+    }
+}
+
+/// Resources of the 1-DOF FI stage in a scratch folder: (folder URI, GUID).
+fn resources(name: &str) -> (CString, CString) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let folder: PathBuf = root.join("target/fmi-tests/misuse").join(name);
+    let _ = std::fs::remove_dir_all(&folder);
+    std::fs::create_dir_all(&folder).expect("scratch folder");
+    crate::package::write_resources(&root.join("scenarios/paper/fig05b_fi.toml"), &folder)
+        .expect("resources");
+    let guid = Instance::new(&folder, None)
+        .expect("instance")
+        .guid()
+        .to_string();
+    let uri = format!("file://{}", folder.canonicalize().expect("path").display());
+    (
+        CString::new(uri).expect("URI"),
+        CString::new(guid).expect("GUID"),
+    )
+}
+
+struct Unit {
+    c: fmi2Component,
+    _functions: Box<fmi2CallbackFunctions>,
+}
+
+fn instantiate(log: &Log, name: &str) -> Unit {
+    let (uri, guid) = resources(name);
+    let functions = Box::new(callbacks(log));
+    // SAFETY: valid strings and callbacks that outlive the instance.
+    let c = unsafe {
+        fmi2Instantiate(
+            c"test".as_ptr(),
+            1,
+            guid.as_ptr(),
+            uri.as_ptr(),
+            &*functions,
+            0,
+            0,
+        )
+    };
+    assert!(!c.is_null(), "instantiate: {:?}", log.borrow());
+    Unit {
+        c,
+        _functions: functions,
+    }
+}
+
+fn initialised(log: &Log, name: &str) -> Unit {
+    let unit = instantiate(log, name);
+    assert_eq!(fmi2SetupExperiment(unit.c, 0, 0.0, 0.0, 0, 0.0), OK);
+    assert_eq!(fmi2EnterInitializationMode(unit.c), OK);
+    assert_eq!(fmi2ExitInitializationMode(unit.c), OK);
+    unit
+}
+
+/// The last message, which must report an error.
+fn last_error(log: &Log) -> String {
+    let log = log.borrow();
+    let (status, category, message) = log.last().expect("a message was logged");
+    assert!(*status >= ERROR, "status {status}: {message}");
+    assert_eq!(category, "logStatusError");
+    message.clone()
+}
+
+#[test]
+fn calls_out_of_order_are_refused_with_a_reason() {
+    let log = Log::default();
+    let unit = instantiate(&log, "order");
+    assert_eq!(fmi2DoStep(unit.c, 0.0, 1e-3, 0), ERROR);
+    assert!(last_error(&log).contains("fmi2DoStep is not allowed in the instantiated state"));
+    assert_eq!(fmi2ExitInitializationMode(unit.c), ERROR);
+    let mut value = 0.0;
+    // SAFETY: valid pointers.
+    assert_eq!(unsafe { fmi2GetReal(unit.c, &0, 1, &mut value) }, ERROR);
+    assert_eq!(fmi2EnterInitializationMode(unit.c), OK);
+    assert_eq!(fmi2SetupExperiment(unit.c, 0, 0.0, 0.0, 0, 0.0), ERROR);
+    assert!(last_error(&log).contains("fmi2SetupExperiment"));
+    assert_eq!(fmi2ExitInitializationMode(unit.c), OK);
+    assert_eq!(fmi2EnterInitializationMode(unit.c), ERROR);
+    assert_eq!(fmi2Terminate(unit.c), OK);
+    assert_eq!(fmi2DoStep(unit.c, 0.0, 1e-3, 0), ERROR);
+    assert!(last_error(&log).contains("terminated"));
+    assert_eq!(fmi2Reset(unit.c), OK);
+    assert_eq!(fmi2EnterInitializationMode(unit.c), OK);
+    fmi2FreeInstance(unit.c);
+}
+
+#[test]
+fn null_pointers_are_refused() {
+    let log = Log::default();
+    let unit = initialised(&log, "null");
+    let mut values = [0.0; 3];
+    // SAFETY: null arrays are what is being tested; the unit checks them.
+    unsafe {
+        assert_eq!(
+            fmi2GetReal(unit.c, std::ptr::null(), 3, values.as_mut_ptr()),
+            ERROR
+        );
+        assert!(last_error(&log).contains("vr is a null pointer"));
+        assert_eq!(
+            fmi2GetReal(unit.c, [0, 1, 2].as_ptr(), 3, std::ptr::null_mut()),
+            ERROR
+        );
+        assert_eq!(
+            fmi2SetReal(unit.c, [40].as_ptr(), 1, std::ptr::null()),
+            ERROR
+        );
+        assert_eq!(
+            fmi2GetReal(std::ptr::null_mut(), [0].as_ptr(), 1, values.as_mut_ptr()),
+            ERROR
+        );
+        assert_eq!(fmi2GetFMUstate(unit.c, std::ptr::null_mut()), ERROR);
+        assert_eq!(fmi2SetFMUstate(unit.c, std::ptr::null_mut()), ERROR);
+        assert_eq!(fmi2GetRealStatus(unit.c, 2, std::ptr::null_mut()), ERROR);
+        // Empty arrays may be null.
+        assert_eq!(
+            fmi2GetReal(unit.c, std::ptr::null(), 0, std::ptr::null_mut()),
+            OK
+        );
+        // Instantiation with missing arguments returns null and says why.
+        let (uri, guid) = resources("null_instantiate");
+        let functions = callbacks(&log);
+        let none = fmi2Instantiate(
+            c"x".as_ptr(),
+            1,
+            guid.as_ptr(),
+            std::ptr::null(),
+            &functions,
+            0,
+            0,
+        );
+        assert!(none.is_null());
+        assert!(last_error(&log).contains("fmuResourceLocation is a null pointer"));
+        let none = fmi2Instantiate(
+            c"x".as_ptr(),
+            1,
+            std::ptr::null(),
+            uri.as_ptr(),
+            &functions,
+            0,
+            0,
+        );
+        assert!(none.is_null());
+        let none = fmi2Instantiate(
+            c"x".as_ptr(),
+            0,
+            guid.as_ptr(),
+            uri.as_ptr(),
+            &functions,
+            0,
+            0,
+        );
+        assert!(none.is_null());
+        assert!(last_error(&log).contains("Co-Simulation only"));
+        let none = fmi2Instantiate(
+            c"x".as_ptr(),
+            1,
+            c"{wrong}".as_ptr(),
+            uri.as_ptr(),
+            &functions,
+            0,
+            0,
+        );
+        assert!(none.is_null());
+        assert!(last_error(&log).contains("does not match"));
+        // No callbacks at all: still no crash.
+        let none = fmi2Instantiate(
+            std::ptr::null(),
+            1,
+            guid.as_ptr(),
+            c"http://x".as_ptr(),
+            std::ptr::null(),
+            0,
+            0,
+        );
+        assert!(none.is_null());
+    }
+    fmi2FreeInstance(unit.c);
+}
+
+#[test]
+fn unknown_and_unsettable_variables_are_refused_and_change_nothing() {
+    let log = Log::default();
+    let unit = initialised(&log, "value_references");
+    let mut value = 0.0;
+    // SAFETY: valid pointers throughout.
+    unsafe {
+        assert_eq!(fmi2GetReal(unit.c, &9999, 1, &mut value), ERROR);
+        assert!(last_error(&log).contains("unknown value reference 9999"));
+        // controller.k (value reference 0) is a parameter: fixed after initialisation.
+        assert_eq!(fmi2SetReal(unit.c, &0, 1, &1.0), ERROR);
+        assert!(last_error(&log).contains("parameters are fixed"));
+        // The servo force input may be set, but not to NaN; a refused call
+        // leaves the earlier entries untouched.
+        let servo_force = 3 + 6 + 12 + 2;
+        assert_eq!(
+            fmi2SetReal(
+                unit.c,
+                [servo_force, servo_force].as_ptr(),
+                2,
+                [1.5, f64::NAN].as_ptr()
+            ),
+            ERROR
+        );
+        assert!(last_error(&log).contains("not a finite number"));
+        assert_eq!(fmi2GetReal(unit.c, &servo_force, 1, &mut value), OK);
+        assert_eq!(value, 0.0);
+        // Outputs cannot be set.
+        let output = servo_force + 2;
+        assert_eq!(fmi2SetReal(unit.c, &output, 1, &1.0), ERROR);
+        assert!(last_error(&log).contains("it is an output"));
+        let mut integer = 0;
+        assert_eq!(fmi2GetInteger(unit.c, &0, 1, &mut integer), ERROR);
+        assert!(last_error(&log).contains("no Integer variables"));
+        assert_eq!(fmi2SetString(unit.c, &0, 1, &c"a".as_ptr()), ERROR);
+        let mut dv = 0.0;
+        assert_eq!(
+            fmi2GetDirectionalDerivative(unit.c, &0, 1, &output, 1, &1.0, &mut dv),
+            ERROR
+        );
+        assert!(last_error(&log).contains("is not an input"));
+        assert_eq!(
+            fmi2GetDirectionalDerivative(unit.c, &0, 1, &servo_force, 1, &1.0, &mut dv),
+            ERROR
+        );
+        assert!(last_error(&log).contains("is not an output"));
+        assert_eq!(fmi2SetRealInputDerivatives(unit.c, &0, 1, &1, &1.0), ERROR);
+        assert_eq!(fmi2CancelStep(unit.c), ERROR);
+        let mut status = 0;
+        assert_eq!(fmi2GetStatus(unit.c, 0, &mut status), DISCARD);
+        let mut time = -1.0;
+        assert_eq!(fmi2GetRealStatus(unit.c, 2, &mut time), OK);
+        assert_eq!(time, 0.0);
+    }
+    fmi2FreeInstance(unit.c);
+}
+
+#[test]
+fn bad_step_sizes_and_communication_points_are_refused() {
+    let log = Log::default();
+    let unit = initialised(&log, "steps");
+    for step in [-1e-3, 0.0, f64::NAN, f64::INFINITY] {
+        assert_eq!(fmi2DoStep(unit.c, 0.0, step, 0), ERROR, "step {step}");
+        assert!(last_error(&log).contains("communicationStepSize must be a positive number"));
+    }
+    assert_eq!(fmi2DoStep(unit.c, 0.5, 1e-3, 0), ERROR);
+    assert!(last_error(&log).contains("is not the unit's time"));
+    assert_eq!(fmi2DoStep(unit.c, f64::NAN, 1e-3, 0), ERROR);
+    // The instance is still usable after all that.
+    assert_eq!(fmi2DoStep(unit.c, 0.0, 1e-3, 0), OK);
+    fmi2FreeInstance(unit.c);
+}
+
+#[test]
+fn double_frees_are_detected() {
+    let log = Log::default();
+    let unit = initialised(&log, "double_free");
+    let mut state: fmi2FMUstate = std::ptr::null_mut();
+    // SAFETY: valid pointers; the stale copy is what is being tested.
+    unsafe {
+        assert_eq!(fmi2GetFMUstate(unit.c, &mut state), OK);
+        let stale = state;
+        assert_eq!(fmi2FreeFMUstate(unit.c, &mut state), OK);
+        assert!(state.is_null());
+        let mut copy = stale;
+        assert_eq!(fmi2FreeFMUstate(unit.c, &mut copy), ERROR);
+        assert!(last_error(&log).contains("not a live state"));
+        assert_eq!(fmi2SetFMUstate(unit.c, stale), ERROR);
+    }
+    fmi2FreeInstance(unit.c);
+    fmi2FreeInstance(unit.c);
+    assert_eq!(fmi2DoStep(unit.c, 0.0, 1e-3, 0), ERROR);
+    assert!(last_error(&log).contains("already freed"));
+}
+
+#[test]
+fn a_panic_inside_the_model_becomes_fmi2fatal() {
+    let log = Log::default();
+    let unit = initialised(&log, "panic");
+    INJECT_PANIC.with(|flag| flag.set(true));
+    assert_eq!(fmi2DoStep(unit.c, 0.0, 1e-3, 0), FATAL);
+    let message = last_error(&log);
+    assert!(
+        message.contains("injected fault inside the model step"),
+        "{message}"
+    );
+    assert!(message.contains("unusable"));
+    assert_eq!(fmi2DoStep(unit.c, 0.0, 1e-3, 0), ERROR);
+    assert!(last_error(&log).contains("fatal error"));
+    assert_eq!(fmi2Reset(unit.c), ERROR);
+    fmi2FreeInstance(unit.c);
+}
+
+#[test]
+fn logger_messages_escape_percent_signs() {
+    let log = Log::default();
+    let unit = initialised(&log, "percent");
+    let categories = [c"%s%n".as_ptr()];
+    // SAFETY: valid pointers.
+    assert_eq!(
+        unsafe { fmi2SetDebugLogging(unit.c, 1, 1, categories.as_ptr()) },
+        ERROR
+    );
+    assert!(last_error(&log).contains("\"%%s%%n\""));
+    fmi2FreeInstance(unit.c);
+}
+
+/// Thousands of random calls with random (often invalid) arguments: no crash,
+/// statuses within the standard's set, every failure logged, and the FMU
+/// still steps correctly when used properly afterwards.
+#[test]
+fn random_call_sequences_never_crash() {
+    let log = Log::default();
+    let mut rng = rand::rngs::StdRng::seed_from_u64(20261122);
+    let mut units = vec![instantiate(&log, "random_a"), instantiate(&log, "random_b")];
+    let mut states: Vec<fmi2FMUstate> = Vec::new();
+    let pick_f64 = |rng: &mut rand::rngs::StdRng| -> f64 {
+        match rng.random_range(0..6) {
+            0 => f64::NAN,
+            1 => -1e-3,
+            2 => 0.0,
+            3 => 1e-3,
+            4 => rng.random_range(-1.0..1.0),
+            _ => 1e-4,
+        }
+    };
+    let mut calls = 0;
+    for _ in 0..3000 {
+        let unit = &units[rng.random_range(0..units.len())];
+        let c = if rng.random_bool(0.03) {
+            std::ptr::null_mut()
+        } else {
+            unit.c
+        };
+        let vr: u32 = if rng.random_bool(0.8) {
+            rng.random_range(0..80)
+        } else {
+            rng.random()
+        };
+        let before = log.borrow().len();
+        let mut value = 0.0;
+        let mut state: fmi2FMUstate = std::ptr::null_mut();
+        // SAFETY: all pointers are valid or null; the unit checks the rest.
+        let status = unsafe {
+            match rng.random_range(0..16) {
+                0 => fmi2SetupExperiment(
+                    c,
+                    rng.random_range(0..2),
+                    pick_f64(&mut rng),
+                    0.0,
+                    rng.random_range(0..2),
+                    pick_f64(&mut rng),
+                ),
+                1 => fmi2EnterInitializationMode(c),
+                2 => fmi2ExitInitializationMode(c),
+                3 => fmi2Terminate(c),
+                4 => fmi2Reset(c),
+                5 => fmi2GetReal(c, &vr, 1, &mut value),
+                6 => fmi2SetReal(c, &vr, 1, &pick_f64(&mut rng)),
+                7 | 8 => {
+                    let mut t = 0.0;
+                    fmi2GetRealStatus(c, 2, &mut t);
+                    let point = if rng.random_bool(0.8) {
+                        t
+                    } else {
+                        pick_f64(&mut rng)
+                    };
+                    fmi2DoStep(c, point, pick_f64(&mut rng), 0)
+                }
+                9 => {
+                    let status = fmi2GetFMUstate(c, &mut state);
+                    if !state.is_null() {
+                        states.push(state);
+                    }
+                    status
+                }
+                10 => match states.len() {
+                    0 => fmi2SetFMUstate(c, std::ptr::null_mut()),
+                    n => fmi2SetFMUstate(c, states[rng.random_range(0..n)]),
+                },
+                11 => match states.len() {
+                    0 => fmi2FreeFMUstate(c, &mut state),
+                    n => {
+                        let mut s = states[rng.random_range(0..n)];
+                        fmi2FreeFMUstate(c, &mut s)
+                    }
+                },
+                12 => {
+                    let mut dv = 0.0;
+                    fmi2GetDirectionalDerivative(c, &vr, 1, &(vr % 30), 1, &1.0, &mut dv)
+                }
+                13 => {
+                    let mut size = 0usize;
+                    let s = states.last().copied().unwrap_or(std::ptr::null_mut());
+                    let status = fmi2SerializedFMUstateSize(c, s, &mut size);
+                    let mut bytes = vec![0 as c_char; size.min(4096)];
+                    if rng.random_bool(0.3) && !bytes.is_empty() {
+                        bytes.pop();
+                    }
+                    let status2 = fmi2SerializeFMUstate(c, s, bytes.as_mut_ptr(), bytes.len());
+                    if rng.random_bool(0.5) && !bytes.is_empty() {
+                        let i = rng.random_range(0..bytes.len());
+                        bytes[i] = bytes[i].wrapping_add(1);
+                    }
+                    let mut restored: fmi2FMUstate = std::ptr::null_mut();
+                    let status3 =
+                        fmi2DeSerializeFMUstate(c, bytes.as_ptr(), bytes.len(), &mut restored);
+                    if !restored.is_null() {
+                        states.push(restored);
+                    }
+                    status.max(status2).max(status3)
+                }
+                14 => {
+                    let mut flag = 0;
+                    fmi2GetBooleanStatus(c, rng.random_range(-1..5), &mut flag)
+                }
+                _ => fmi2SetDebugLogging(c, rng.random_range(0..2), 0, std::ptr::null()),
+            }
+        };
+        calls += 1;
+        assert!([OK, DISCARD, ERROR].contains(&status), "status {status}");
+        if status == ERROR && !c.is_null() {
+            assert!(
+                log.borrow().len() > before,
+                "an error without a log message"
+            );
+        }
+    }
+    assert!(calls == 3000);
+    for unit in units.drain(..) {
+        fmi2FreeInstance(unit.c);
+    }
+    // Proper use still works afterwards.
+    let unit = initialised(&log, "random_after");
+    let mut t = 0.0;
+    for k in 1..=100 {
+        let next = k as f64 * 1e-3;
+        assert_eq!(fmi2DoStep(unit.c, t, next - t, 0), OK);
+        t = next;
+    }
+    let mut time = 0.0;
+    // SAFETY: valid pointer.
+    assert_eq!(unsafe { fmi2GetRealStatus(unit.c, 2, &mut time) }, OK);
+    assert_eq!(time, 0.1);
+    fmi2FreeInstance(unit.c);
+}

@@ -1,0 +1,114 @@
+//! Shared set-up of the FMU tests: the Python environment with FMPy, FMUs
+//! built from shipped scenarios with the library this build made, and
+//! running the Python helper scripts.
+#![allow(dead_code)] // each test binary uses a different part
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::OnceLock;
+
+/// The repository root.
+pub fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// The cdylib of this build (beside the test binary, in `target/<profile>/deps`).
+pub fn library() -> PathBuf {
+    let exe = std::env::current_exe().expect("test binary path");
+    fistage_fmi::package::default_library_locations(&exe)
+        .into_iter()
+        .chain(
+            exe.parent()
+                .and_then(Path::parent)
+                .map(|p| p.join("libfistage_fmi.so")),
+        )
+        .find(|p| p.is_file())
+        .expect("libfistage_fmi.so is built beside the tests")
+}
+
+/// The python of the environment with FMPy: `FISTAGE_PYTHON` if set (as
+/// `.ci/run` sets it), else a virtual environment under `target/` made on first use.
+pub fn python() -> &'static Path {
+    static PYTHON: OnceLock<PathBuf> = OnceLock::new();
+    PYTHON.get_or_init(|| {
+        if let Some(python) = std::env::var_os("FISTAGE_PYTHON") {
+            return PathBuf::from(python);
+        }
+        let venv = root().join("target/fmi-venv");
+        let output = Command::new("bash")
+            .arg(root().join("ffi/tests/python/env.sh"))
+            .arg(&venv)
+            .output()
+            .expect("run ffi/tests/python/env.sh");
+        assert!(
+            output.status.success(),
+            "making the FMPy environment failed:\n{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        PathBuf::from(String::from_utf8_lossy(&output.stdout).trim())
+    })
+}
+
+/// A fresh scratch folder under `target/fmi-tests/<name>`.
+pub fn scratch(name: &str) -> PathBuf {
+    let dir = root().join("target/fmi-tests").join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create scratch folder");
+    dir
+}
+
+/// Builds the FMU of a shipped scenario into `folder`.
+pub fn fmu(scenario: &str, folder: &Path) -> PathBuf {
+    let bytes = fistage_fmi::build_fmu(&root().join(scenario), &library()).expect("build FMU");
+    let stem = Path::new(scenario)
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("stage");
+    let path = folder.join(format!("{stem}.fmu"));
+    std::fs::write(&path, bytes).expect("write FMU");
+    path
+}
+
+/// Runs `ffi/tests/python/<script>` with arguments; returns its standard output.
+pub fn run_python(script: &str, args: &[&str]) -> String {
+    let output = Command::new(python())
+        .arg(root().join("ffi/tests/python").join(script))
+        .args(args)
+        .output()
+        .expect("run python");
+    assert!(
+        output.status.success(),
+        "{script} failed:\n{}\n{}",
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    );
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
+/// The FMPy `c-code` folder with the official FMI headers.
+pub fn fmi_headers() -> PathBuf {
+    let out = Command::new(python())
+        .args([
+            "-c",
+            "import fmpy, os; print(os.path.join(os.path.dirname(fmpy.__file__), 'c-code'))",
+        ])
+        .output()
+        .expect("ask FMPy for its headers");
+    PathBuf::from(String::from_utf8_lossy(&out.stdout).trim())
+}
+
+/// Reads a CSV with a header row into (names, rows).
+pub fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).expect("read CSV");
+    let mut lines = text.lines();
+    let names = lines
+        .next()
+        .unwrap_or_default()
+        .split(',')
+        .map(str::to_string)
+        .collect();
+    let rows = lines
+        .map(|l| l.split(',').map(|v| v.parse().expect("number")).collect())
+        .collect();
+    (names, rows)
+}
