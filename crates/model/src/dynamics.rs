@@ -727,6 +727,34 @@ impl Model {
 }
 
 impl Workspace<f64> {
+    /// World rotation of body i after an evaluation.
+    pub(crate) fn rotation_of(&self, i: usize) -> Matrix3<f64> {
+        self.rotation[i]
+    }
+
+    /// World position of body i's frame origin after an evaluation.
+    pub(crate) fn origin_of(&self, i: usize) -> Vector3<f64> {
+        self.origin[i]
+    }
+
+    /// World angular velocity of body i after an evaluation.
+    pub(crate) fn omega_of(&self, i: usize) -> Vector3<f64> {
+        self.omega[i]
+    }
+
+    /// World velocity of body i's frame origin after an evaluation.
+    pub(crate) fn velocity_of(&self, i: usize) -> Vector3<f64> {
+        self.velocity[i]
+    }
+
+    /// The element wrench on body i after an evaluation (before gravity and inertia).
+    pub(crate) fn wrench_of(&self, i: usize) -> crate::body_motion::BodyWrench {
+        crate::body_motion::BodyWrench {
+            force: self.force[i],
+            moment: self.moment[i],
+        }
+    }
+
     /// World velocity of a point (body frame coordinates) after [`Model::evaluate`].
     pub(crate) fn point_velocity(&self, body: usize, point: &Vector3<f64>) -> Vector3<f64> {
         self.velocity[body] + self.omega[body].cross(&(self.rotation[body] * point))

@@ -6,6 +6,7 @@
 //! with a per-thread [`Workspace`].
 
 pub mod assembly;
+pub mod body_motion;
 pub mod dynamics;
 pub mod equilibrium;
 pub mod error;
@@ -19,6 +20,7 @@ pub mod scenario;
 mod translational;
 
 pub use assembly::{Loaded, assemble, load};
+pub use body_motion::{BodyMotion, BodyWrench};
 pub use dynamics::{ElementValues, InputValues, Workspace};
 pub use equilibrium::{EquilibriumError, EquilibriumKind};
 pub use error::LoadError;
