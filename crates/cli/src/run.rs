@@ -24,6 +24,12 @@ pub struct RunArgs {
     /// Skip the plots.
     #[arg(long)]
     pub no_plots: bool,
+    /// Engine to use instead of the scenario's (`native` or `rapier`).
+    #[arg(long)]
+    pub engine: Option<String>,
+    /// Fixed step of the rapier engine, s (instead of `rapier.dt`).
+    #[arg(long)]
+    pub dt: Option<f64>,
 }
 
 /// Runs the command.
@@ -35,6 +41,16 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
             "--rtol must be in (0, 0.1), got {rtol}"
         );
         loaded.scenario.solver.rtol = rtol;
+    }
+    if let Some(engine) = &args.engine {
+        loaded.scenario.solver.engine = engine.clone();
+    }
+    if let Some(dt) = args.dt {
+        anyhow::ensure!(
+            dt > 0.0 && dt.is_finite(),
+            "--dt must be positive, got {dt}"
+        );
+        loaded.scenario.rapier.dt = Some(dt);
     }
     let out_dir = args
         .out

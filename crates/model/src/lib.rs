@@ -33,4 +33,7 @@ pub use model::{
 pub use reference::{Reference, ReferenceSample};
 pub use robot::{FISTAGE_NS, RobotSpec};
 pub use scalar::{Dual64, Scalar};
-pub use scenario::{ControllerSettings, Override, Scenario, SolverSettings, Start};
+pub use scenario::{
+    ControllerSettings, Override, PayloadSettings, RapierSettings, Scenario, SolverSettings, Start,
+    StopSettings,
+};

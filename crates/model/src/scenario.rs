@@ -57,6 +57,10 @@ struct ScenarioFile {
     start: Start,
     #[serde(default)]
     solver: SolverSettings,
+    /// Shorthand for `solver.engine`.
+    engine: Option<String>,
+    #[serde(default)]
+    rapier: RapierSettings,
     #[serde(default)]
     output: OutputFile,
     #[serde(default)]
@@ -198,6 +202,58 @@ impl Default for SolverSettings {
     }
 }
 
+/// Settings of the rapier engine (`[rapier]`): the fixed step and optional colliders.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RapierSettings {
+    /// Fixed step, s (default: from the model's fastest mode, see `step_fraction`).
+    pub dt: Option<f64>,
+    /// Step as a fraction of 2 / |lambda|max at the starting state (default 0.05).
+    pub step_fraction: Option<f64>,
+    /// End-of-travel stops on prismatic joints (`[[rapier.stop]]`).
+    #[serde(default, rename = "stop")]
+    pub stops: Vec<StopSettings>,
+    /// A payload box resting on a link (`[rapier.payload]`).
+    pub payload: Option<PayloadSettings>,
+}
+
+/// A hard stop at one or both ends of a prismatic joint's travel: a fixed
+/// block the moving body's collider hits.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StopSettings {
+    /// Prismatic joint whose travel is limited.
+    pub joint: String,
+    /// Joint coordinate where the body meets the lower stop, m.
+    pub lower: Option<f64>,
+    /// Joint coordinate where the body meets the upper stop, m.
+    pub upper: Option<f64>,
+    /// Coefficient of restitution of the impact (0 = dead stop, 1 = elastic).
+    #[serde(default)]
+    pub restitution: f64,
+}
+
+/// A box resting on a link, held by gravity and contact friction only.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PayloadSettings {
+    /// Link it rests on (its top face is found from `position` and `size`).
+    pub link: String,
+    /// Box edge lengths, m.
+    pub size: [f64; 3],
+    /// Mass, kg (uniform density).
+    pub mass: f64,
+    /// Centre of the box in the link frame at the start, m.
+    pub position: [f64; 3],
+    /// Coulomb friction coefficient of the contact.
+    #[serde(default = "default_payload_friction")]
+    pub friction: f64,
+}
+
+fn default_payload_friction() -> f64 {
+    0.5
+}
+
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct OutputFile {
@@ -262,6 +318,8 @@ pub struct Scenario {
     pub start: Start,
     /// Solver settings.
     pub solver: SolverSettings,
+    /// Settings of the rapier engine.
+    pub rapier: RapierSettings,
     /// Output sample rate, Hz.
     pub sample_rate: f64,
     /// Signals to write (all when `None`).
@@ -309,6 +367,20 @@ impl Scenario {
         if let Some(h) = raw.solver.max_step {
             checker.positive("solver.max_step", h)?;
         }
+        let mut solver = raw.solver;
+        if let Some(engine) = raw.engine {
+            if solver.engine != default_engine() && solver.engine != engine {
+                return Err(checker.error(
+                    "engine",
+                    format!(
+                        "\"{engine}\" contradicts solver.engine = \"{}\"",
+                        solver.engine
+                    ),
+                ));
+            }
+            solver.engine = engine;
+        }
+        checker.rapier(&raw.rapier)?;
         let sample_rate = raw
             .output
             .sample_rate
@@ -344,7 +416,8 @@ impl Scenario {
             overrides,
             initial: raw.initial,
             start: raw.start,
-            solver: raw.solver,
+            solver,
+            rapier: raw.rapier,
             sample_rate,
             signals: raw.output.signals,
             window,
@@ -370,6 +443,52 @@ struct Checker<'a> {
 impl Checker<'_> {
     fn error(&self, key: &str, message: impl Into<String>) -> LoadError {
         LoadError::scenario(self.file, key, message)
+    }
+
+    /// Ranges of the `[rapier]` settings (names are checked against the model later).
+    fn rapier(&self, rapier: &RapierSettings) -> Result<(), LoadError> {
+        if let Some(dt) = rapier.dt {
+            self.positive("rapier.dt", dt)?;
+        }
+        if let Some(fraction) = rapier.step_fraction {
+            self.positive("rapier.step_fraction", fraction)?;
+            if fraction > 1.0 {
+                return Err(self.error("rapier.step_fraction", "must be at most 1"));
+            }
+        }
+        for (i, stop) in rapier.stops.iter().enumerate() {
+            let key = format!("rapier.stop[{i}]");
+            if stop.lower.is_none() && stop.upper.is_none() {
+                return Err(self.error(&key, "needs lower, upper or both"));
+            }
+            for (name, value) in [("lower", stop.lower), ("upper", stop.upper)] {
+                if let Some(v) = value {
+                    self.finite(&format!("{key}.{name}"), v)?;
+                }
+            }
+            if let (Some(lower), Some(upper)) = (stop.lower, stop.upper)
+                && lower >= upper
+            {
+                return Err(self.error(&key, format!("lower {lower} must be below upper {upper}")));
+            }
+            if !(0.0..=1.0).contains(&stop.restitution) {
+                return Err(self.error(
+                    &format!("{key}.restitution"),
+                    format!("must be in [0, 1], got {}", stop.restitution),
+                ));
+            }
+        }
+        if let Some(payload) = &rapier.payload {
+            self.positive("rapier.payload.mass", payload.mass)?;
+            for (axis, size) in ["x", "y", "z"].iter().zip(payload.size) {
+                self.positive(&format!("rapier.payload.size.{axis}"), size)?;
+            }
+            for (axis, p) in ["x", "y", "z"].iter().zip(payload.position) {
+                self.finite(&format!("rapier.payload.position.{axis}"), p)?;
+            }
+            self.non_negative("rapier.payload.friction", payload.friction)?;
+        }
+        Ok(())
     }
 
     fn finite(&self, key: &str, value: f64) -> Result<(), LoadError> {

@@ -117,6 +117,16 @@ pub enum SimError {
     /// Settings out of range.
     #[error("invalid settings: {0}")]
     InvalidSettings(String),
+    /// A fixed-step engine produced a non-finite state.
+    #[error(
+        "state \"{state}\" became non-finite at t = {t:.9} s (the fixed step is too long for this model)"
+    )]
+    NonFinite {
+        /// Time reached, s.
+        t: f64,
+        /// Name of the first non-finite state.
+        state: String,
+    },
 }
 
 fn cause_text(non_finite: &Option<String>) -> String {
@@ -163,7 +173,11 @@ impl OdeSystem for ModelSystem<'_> {
     }
 }
 
-fn check_settings(model: &Model, x0: &[f64], settings: &SimSettings) -> Result<(), SimError> {
+pub(crate) fn check_settings(
+    model: &Model,
+    x0: &[f64],
+    settings: &SimSettings,
+) -> Result<(), SimError> {
     if x0.len() != model.n_states() {
         return Err(SimError::InvalidInitialState(format!(
             "{} entries for {} states",
@@ -300,13 +314,24 @@ impl Engine for NativeEngine {
     }
 }
 
-/// The engine a scenario names.
+/// An engine by name, with default settings (the rapier engine without colliders).
 pub fn engine_by_name(name: &str) -> Option<Box<dyn Engine>> {
     match name {
         "native" | "dopri5" => Some(Box::new(NativeEngine)),
+        "rapier" => Some(Box::new(crate::rapier_engine::RapierEngine::default())),
         _ => None,
     }
 }
 
+/// The engine a scenario names (`solver.engine` or `engine`), with its settings.
+pub fn engine_for(scenario: &Scenario) -> Option<Box<dyn Engine>> {
+    match scenario.solver.engine.as_str() {
+        "rapier" => Some(Box::new(crate::rapier_engine::RapierEngine {
+            settings: scenario.rapier.clone(),
+        })),
+        other => engine_by_name(other),
+    }
+}
+
 /// Names accepted by [`engine_by_name`].
-pub const ENGINE_NAMES: [&str; 1] = ["native"];
+pub const ENGINE_NAMES: [&str; 2] = ["native", "rapier"];

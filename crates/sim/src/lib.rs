@@ -9,6 +9,7 @@ pub mod cosim;
 pub mod dopri;
 pub mod engine;
 pub mod metrics;
+pub mod rapier_engine;
 pub mod run;
 pub mod trajectory;
 
@@ -16,8 +17,9 @@ pub use cosim::{HeldInputs, Stepper, StepperTolerances};
 pub use dopri::{Checkpoint, StepCounts};
 pub use engine::{
     ENGINE_NAMES, Engine, Excitation, NativeEngine, ScenarioExcitation, SimError, SimSettings,
-    engine_by_name, sample_times,
+    engine_by_name, engine_for, sample_times,
 };
 pub use metrics::{SignalSummary, WindowStats, summarize, window_stats};
+pub use rapier_engine::RapierEngine;
 pub use run::{RunError, RunOutput, initial_state, run_scenario};
-pub use trajectory::{SignalTable, SolverStats, Trajectory};
+pub use trajectory::{ExtraSignal, SignalTable, SolverStats, Trajectory};

@@ -5,7 +5,7 @@ use fistage_model::{EquilibriumKind, LoadError, Loaded, Model, Scenario, Start};
 use thiserror::Error;
 
 use crate::engine::{
-    ENGINE_NAMES, Excitation, ScenarioExcitation, SimError, SimSettings, engine_by_name,
+    ENGINE_NAMES, Excitation, ScenarioExcitation, SimError, SimSettings, engine_for,
 };
 use crate::metrics::{SignalSummary, summarize};
 use crate::trajectory::{SignalTable, Trajectory};
@@ -95,7 +95,7 @@ fn check_signal_names(model: &Model, scenario: &Scenario) -> Result<(), LoadErro
 pub fn run_scenario(loaded: &Loaded, progress: &mut dyn FnMut(f64)) -> Result<RunOutput, RunError> {
     let scenario = &loaded.scenario;
     let model = &loaded.model;
-    let engine = engine_by_name(&scenario.solver.engine).ok_or_else(|| {
+    let engine = engine_for(scenario).ok_or_else(|| {
         scenario.error(
             "solver.engine",
             format!(
@@ -106,6 +106,26 @@ pub fn run_scenario(loaded: &Loaded, progress: &mut dyn FnMut(f64)) -> Result<Ru
         )
     })?;
     check_signal_names(model, scenario)?;
+    if engine.name() != "rapier" {
+        let colliders = if !scenario.rapier.stops.is_empty() {
+            Some("rapier.stop")
+        } else if scenario.rapier.payload.is_some() {
+            Some("rapier.payload")
+        } else {
+            None
+        };
+        if let Some(key) = colliders {
+            return Err(scenario
+                .error(
+                    key,
+                    format!(
+                        "colliders need engine = \"rapier\"; the {} engine has no contacts",
+                        engine.name()
+                    ),
+                )
+                .into());
+        }
+    }
     let x0 = initial_state(model, scenario)?;
     let excitation = ScenarioExcitation::from_scenario(scenario);
     let settings = SimSettings::from_scenario(scenario);

@@ -32,6 +32,19 @@ pub struct Trajectory {
     pub n_states: usize,
     /// Solver statistics.
     pub stats: SolverStats,
+    /// Signals of things outside the model (e.g. a rapier payload), one value per sample.
+    pub extra: Vec<ExtraSignal>,
+}
+
+/// A signal an engine records beside the model's states.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ExtraSignal {
+    /// Name, e.g. `payload.slip`.
+    pub name: String,
+    /// SI unit.
+    pub unit: &'static str,
+    /// One value per sample.
+    pub values: Vec<f64>,
 }
 
 impl Trajectory {
@@ -42,6 +55,7 @@ impl Trajectory {
             states: Vec::with_capacity(samples * n_states),
             n_states,
             stats: SolverStats::default(),
+            extra: Vec::new(),
         }
     }
 
@@ -88,12 +102,18 @@ impl Trajectory {
                 column.push(*value);
             }
         }
-        SignalTable {
+        let mut table = SignalTable {
             names: model.signals.iter().map(|s| s.name.clone()).collect(),
             units: model.signals.iter().map(|s| s.unit.to_string()).collect(),
             times: self.times.clone(),
             columns,
+        };
+        for extra in &self.extra {
+            table.names.push(extra.name.clone());
+            table.units.push(extra.unit.to_string());
+            table.columns.push(extra.values.clone());
         }
+        table
     }
 }
 

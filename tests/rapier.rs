@@ -1,0 +1,241 @@
+//! The rapier engine against the native engine: the same steady-state
+//! statistics on the paper's Fig. 5b stage and on the symmetric and a
+//! mismatched four-bearing stage, with a difference that shrinks with the
+//! step; the same torque-free tumbling; and the colliders only rapier has (a
+//! hard stop, a loose payload) checked against physics computed independently.
+
+use fistage_model::{Loaded, RobotSpec, Scenario, assemble};
+use fistage_sim::{
+    Engine, NativeEngine, RapierEngine, RunOutput, ScenarioExcitation, SimSettings, run_scenario,
+};
+use fistage_tests::{load, run};
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+use std::path::Path;
+
+fn with_engine(loaded: &Loaded, engine: &str, dt: Option<f64>) -> RunOutput {
+    let mut loaded = loaded.clone();
+    loaded.scenario.solver.engine = engine.into();
+    loaded.scenario.rapier.dt = dt;
+    run_scenario(&loaded, &mut |_| {}).expect("run")
+}
+
+/// Relative differences (peak-to-peak, mean) of a signal between two runs.
+fn differences(a: &RunOutput, b: &RunOutput, signal: &str) -> (f64, f64) {
+    let (sa, sb) = (
+        fistage_tests::stats(a, signal),
+        fistage_tests::stats(b, signal),
+    );
+    (
+        (sa.peak_to_peak - sb.peak_to_peak).abs() / sb.peak_to_peak,
+        (sa.mean - sb.mean).abs() / sb.mean.abs().max(1e-30),
+    )
+}
+
+#[test]
+fn fig05b_statistics_agree_and_converge_with_the_step() {
+    let mut loaded = load("scenarios/paper/fig05b_fi.toml");
+    loaded.scenario.solver.rtol = 1e-10;
+    let native = run(&loaded);
+    let coarse = with_engine(&loaded, "rapier", Some(2e-5));
+    let fine = with_engine(&loaded, "rapier", Some(1e-5));
+    let (p2p_coarse, mean_coarse) = differences(&coarse, &native, "encoder.position");
+    let (p2p_fine, mean_fine) = differences(&fine, &native, "encoder.position");
+    println!(
+        "dt 2e-5: p2p {p2p_coarse:.2e} mean {mean_coarse:.2e}; dt 1e-5: p2p {p2p_fine:.2e} mean {mean_fine:.2e}"
+    );
+    assert!(
+        p2p_fine < 5e-3 && mean_fine < 2e-4,
+        "rapier at 1e-5 s: {p2p_fine:e}, {mean_fine:e}"
+    );
+    // First order: halving the step about halves the difference.
+    assert!(
+        p2p_fine < 0.7 * p2p_coarse,
+        "{p2p_fine:e} vs {p2p_coarse:e}"
+    );
+    assert!(
+        mean_fine < 0.7 * mean_coarse,
+        "{mean_fine:e} vs {mean_coarse:e}"
+    );
+}
+
+#[test]
+fn four_bearing_stage_statistics_agree() {
+    let mut symmetric = load("scenarios/coupling/symmetric_fig05b.toml");
+    symmetric.scenario.solver.rtol = 1e-10;
+    symmetric.scenario.duration = 3.0;
+    symmetric.scenario.window = [1.5, 3.0];
+    let native = run(&symmetric);
+    let rapier = with_engine(&symmetric, "rapier", Some(1e-5));
+    let (p2p, mean) = differences(&rapier, &native, "encoder.position");
+    println!("symmetric_fig05b: p2p {p2p:.2e} mean {mean:.2e}");
+    assert!(p2p < 3e-3 && mean < 5e-4, "symmetric: {p2p:e}, {mean:e}");
+
+    let mut mismatched = load("scenarios/coupling/friction20_traverse.toml");
+    mismatched.scenario.solver.rtol = 1e-10;
+    let native = run(&mismatched);
+    let rapier = with_engine(&mismatched, "rapier", Some(5e-6));
+    let (p2p, mean) = differences(&rapier, &native, "controller.error");
+    let (_, yaw_mean) = differences(&rapier, &native, "table.yaw");
+    println!("friction20_traverse: error p2p {p2p:.2e} mean {mean:.2e}, yaw mean {yaw_mean:.2e}");
+    assert!(p2p < 2e-2 && mean < 1e-4, "mismatched: {p2p:e}, {mean:e}");
+    assert!(yaw_mean < 5e-3, "yaw excited by the mismatch: {yaw_mean:e}");
+}
+
+const FREE_BODY: &str = r#"<robot name="free" xmlns:fistage="urn:fistage:urdf:1">
+  <link name="world"/>
+  <link name="block"><inertial><origin xyz="0.01 -0.02 0.005" rpy="0.3 -0.2 0.5"/><mass value="2.0"/>
+    <inertia ixx="0.004" ixy="0.0003" ixz="-0.0002" iyy="0.006" iyz="0.0001" izz="0.009"/></inertial></link>
+  <joint name="free" type="floating"><origin xyz="0.1 0.2 0.3" rpy="0.1 0.2 0.3"/><parent link="world"/><child link="block"/></joint>
+</robot>"#;
+
+/// World angular momentum about the centre of mass, from the state.
+fn momentum(model: &fistage_model::Model, x: &[f64]) -> Vector3<f64> {
+    let body = &model.bodies[0];
+    let rotation = model.body_poses(x)[0].0;
+    let nq = model.layout.nq;
+    let omega = body.joint.origin_rotation * Vector3::new(x[nq + 3], x[nq + 4], x[nq + 5]);
+    let inertia: Matrix3<f64> = rotation * body.inertia * rotation.transpose();
+    inertia * omega
+}
+
+#[test]
+fn tumbling_body_conserves_momentum_and_agrees_with_native() {
+    let robot = RobotSpec::from_str(FREE_BODY, Path::new("free.urdf")).expect("robot");
+    let scenario = Scenario::from_str(
+        "robot = \"x\"\nduration = 1\ngravity = [0, 0, 0]\n",
+        Path::new("free.toml"),
+    )
+    .expect("scenario");
+    let model = assemble(robot, &scenario).expect("model").1;
+    let nq = model.layout.nq;
+    let mut x0 = model.zero_state();
+    x0[nq..nq + 6].copy_from_slice(&[0.01, -0.02, 0.03, 3.0, -7.0, 5.0]);
+    let still = ScenarioExcitation {
+        reference: Default::default(),
+        platform_velocity: 0.0,
+        servo_force: 0.0,
+    };
+    let settings = SimSettings {
+        t_end: 1.0,
+        sample_interval: 1e-2,
+        rtol: 1e-11,
+        atol_scale: 1e-2,
+        max_step: None,
+        max_steps: 10_000_000,
+    };
+    let native = NativeEngine
+        .simulate(&model, &x0, &still, &settings, &mut |_| {})
+        .expect("native");
+    let mut rapier_engine = RapierEngine::default();
+    rapier_engine.settings.dt = Some(1e-5);
+    let rapier = rapier_engine
+        .simulate(&model, &x0, &still, &settings, &mut |_| {})
+        .expect("rapier");
+    let l0 = momentum(&model, &x0);
+    let mut drift: f64 = 0.0;
+    for k in 0..rapier.len() {
+        drift = drift.max((momentum(&model, rapier.state(k)) - l0).norm() / l0.norm());
+    }
+    let attitude = |x: &[f64]| UnitQuaternion::from_matrix(&model.body_poses(x)[0].0);
+    let angle = attitude(rapier.last_state()).angle_to(&attitude(native.last_state()));
+    let omega = |x: &[f64]| Vector3::new(x[nq + 3], x[nq + 4], x[nq + 5]);
+    let omega_difference = (omega(rapier.last_state()) - omega(native.last_state())).norm();
+    let omega_change = (omega(native.last_state()) - omega(&x0)).norm();
+    println!(
+        "rapier tumbling: momentum drift {drift:.2e}, attitude difference {angle:.2e} rad, omega difference {omega_difference:.2e} rad/s (omega changes by {omega_change:.2})"
+    );
+    assert!(omega_change > 1.0, "the body tumbles");
+    assert!(drift < 1e-4, "angular momentum drifts by {drift:e}");
+    assert!(angle < 1e-3, "attitudes differ by {angle:e} rad after 1 s");
+    assert!(
+        omega_difference < 1e-3 * omega(&x0).norm(),
+        "{omega_difference:e}"
+    );
+}
+
+#[test]
+fn hard_stop_holds_the_table_where_native_runs_past() {
+    let loaded = load("scenarios/rapier/stop_crash.toml");
+    let upper = loaded.scenario.rapier.stops[0].upper.expect("upper stop");
+    let crashed = run(&loaded);
+    let stats = fistage_tests::stats(&crashed, "table_x.q");
+    let mut free = loaded.clone();
+    free.scenario.rapier.stops.clear();
+    free.scenario.solver.engine = "native".into();
+    let free_stats = fistage_tests::stats(&run(&free), "table_x.q");
+    let position = crashed.signals.column("table_x.q").expect("signal");
+    let peak = position.iter().cloned().fold(f64::MIN, f64::max);
+    println!(
+        "stop at {upper:e} m: peak {peak:e} m, settled {:e} m; without the stop {:e} m",
+        stats.mean, free_stats.mean
+    );
+    assert!(
+        free_stats.mean > 1.5 * upper,
+        "the move goes past the stop without it"
+    );
+    // Held at the stop, pressed into it by the servo by at most tens of micrometres.
+    assert!(
+        stats.mean > upper && stats.mean < upper + 3e-5,
+        "{}",
+        stats.mean
+    );
+    assert!(peak < upper + 5e-5, "peak {peak:e}");
+    // The native engine refuses a scenario with colliders instead of ignoring them.
+    let mut native = loaded.clone();
+    native.scenario.solver.engine = "native".into();
+    let error = run_scenario(&native, &mut |_| {}).expect_err("native refuses colliders");
+    assert!(error.to_string().contains("rapier.stop"), "{error}");
+}
+
+/// Final slip of a Coulomb block on a platform moving with velocity `v(t)`
+/// (samples at interval `dt`): the block's velocity follows the platform's
+/// while that needs at most `mu g`, and changes at `mu g` otherwise.
+fn coulomb_slip(platform_velocity: &[f64], dt: f64, mu_g: f64) -> f64 {
+    let substeps = 200;
+    let h = dt / substeps as f64;
+    let (mut block, mut slip) = (platform_velocity[0], 0.0);
+    for pair in platform_velocity.windows(2) {
+        for k in 0..substeps {
+            let v = pair[0] + (pair[1] - pair[0]) * (k as f64 + 0.5) / substeps as f64;
+            let needed = (v - block) / h;
+            block += needed.clamp(-mu_g, mu_g) * h;
+            slip += (v - block) * h;
+        }
+    }
+    slip
+}
+
+#[test]
+fn payload_stays_put_with_friction_and_slides_as_coulomb_predicts_without() {
+    let held = load("scenarios/rapier/payload_p2p.toml");
+    let output = run(&held);
+    let slip = fistage_tests::stats(&output, "payload.slip").mean;
+    let sink = fistage_tests::stats(&output, "payload.sink").mean;
+    println!("mu 0.5: slip {slip:e} m, sink {sink:e} m");
+    assert!(
+        slip < 2e-6,
+        "peak acceleration 0.58 m/s^2 < mu g: the payload stays ({slip:e})"
+    );
+    assert!(
+        sink > 0.0 && sink < 1e-5,
+        "resting contact compliance {sink:e}"
+    );
+
+    let mut slippery = held.clone();
+    let mu = 0.02;
+    if let Some(payload) = slippery.scenario.rapier.payload.as_mut() {
+        payload.friction = mu;
+    }
+    let output = run(&slippery);
+    let slip = fistage_tests::stats(&output, "payload.slip").mean;
+    let table_velocity = output.signals.column("table.vx").expect("table.vx");
+    let dt = output.signals.times[1] - output.signals.times[0];
+    let g = slippery.scenario.gravity[2].abs();
+    let predicted = coulomb_slip(table_velocity, dt, mu * g).abs();
+    println!("mu {mu}: slip {slip:e} m, Coulomb block on the table's motion {predicted:e} m");
+    assert!(predicted > 5e-5, "the move needs more than mu g");
+    assert!(
+        (slip - predicted).abs() < 0.05 * predicted,
+        "rapier {slip:e} vs Coulomb {predicted:e}"
+    );
+}
