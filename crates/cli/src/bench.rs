@@ -10,7 +10,7 @@ use std::time::Instant;
 use anyhow::Context;
 use fistage_model::Loaded;
 use fistage_sim::{
-    Engine, ScenarioExcitation, SimSettings, Trajectory, engine_by_name, initial_state,
+    Engine, Excitation, ScenarioExcitation, SimSettings, Trajectory, engine_by_name, initial_state,
 };
 
 /// Arguments of `fistage bench`.
@@ -36,6 +36,11 @@ pub struct BenchArgs {
     /// Time the FMI face only: fmi2DoStep from Rust and FMPy's simulate_fmu.
     #[arg(long)]
     pub fmu: bool,
+    /// Compare the native and rapier engines side by side (wall time and
+    /// accuracy against a tight native run) on the paper's Fig. 5b stage and
+    /// the four-bearing traverse, or on `--scenario`.
+    #[arg(long)]
+    pub engines: bool,
     /// Python with FMPy for the FMU table (default: the test environment's,
     /// `target/fmi-venv/bin/python`, else `python3`).
     #[arg(long)]
@@ -142,6 +147,20 @@ fn max_deviation(
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     if args.fmu {
         return crate::bench_fmu::fmu_table(&fmu_python(args), args.repeat.min(5));
+    }
+    if args.engines {
+        let scenarios = match &args.scenario {
+            Some(scenario) => vec![scenario.clone()],
+            None => vec![
+                PathBuf::from("scenarios/paper/fig05b_fi.toml"),
+                PathBuf::from("scenarios/coupling/friction20_traverse.toml"),
+            ],
+        };
+        for scenario in scenarios {
+            engines_table(args, &scenario)?;
+            println!();
+        }
+        return Ok(());
     }
     match &args.scenario {
         Some(scenario) => {
@@ -272,6 +291,109 @@ fn engine_table(args: &BenchArgs, scenario: &Path, rtols: &[f64]) -> anyhow::Res
             counts.rejected,
             counts.rhs_evaluations,
         );
+    }
+    Ok(())
+}
+
+/// Relative difference of the steady-state peak-to-peak of a signal.
+fn p2p_difference(
+    loaded: &Loaded,
+    a: &Trajectory,
+    b: &Trajectory,
+    signal: &str,
+) -> anyhow::Result<f64> {
+    let excitation = ScenarioExcitation::from_scenario(&loaded.scenario);
+    let [start, end] = loaded.scenario.window;
+    let p2p = |trajectory: &Trajectory| -> anyhow::Result<f64> {
+        let table = trajectory.signals(&loaded.model, &excitation);
+        let column = table
+            .column(signal)
+            .with_context(|| format!("no signal {signal}"))?;
+        let window = table
+            .times
+            .iter()
+            .zip(column)
+            .filter(|(t, _)| **t >= start && **t <= end)
+            .map(|(_, v)| *v);
+        let (lo, hi) = window.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+        Ok(hi - lo)
+    };
+    let (pa, pb) = (p2p(a)?, p2p(b)?);
+    Ok((pa - pb).abs() / pb.abs().max(1e-300))
+}
+
+/// Native (two tolerances) and rapier (its default step, half and a quarter
+/// of it) on one scenario, against a native run at the reference tolerance.
+fn engines_table(args: &BenchArgs, scenario: &Path) -> anyhow::Result<()> {
+    use fistage_sim::rapier_engine::{RapierEngine, rapier_step};
+    let loaded = fistage_model::load(scenario)?;
+    let native = fistage_sim::NativeEngine;
+    eprintln!("reference run at rtol {:e} ...", args.reference_rtol);
+    let reference = time_run(&loaded, &native, args.reference_rtol, 1)?;
+    let simulated = loaded.scenario.duration;
+    let repeat = args.repeat.min(3);
+    println!(
+        "`{}` ({simulated} s simulated; median of {repeat} runs; errors of `{}` against native at rtol {:e}; p2p over the window {:?} s)\n",
+        scenario.display(),
+        args.signal,
+        args.reference_rtol,
+        loaded.scenario.window
+    );
+    println!(
+        "| engine | setting | wall s | x real time | steps | model evaluations | max error (m) | relative error | steady p2p difference |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|");
+    let row = |engine: &dyn Engine, setting: String, rtol: f64| -> anyhow::Result<()> {
+        let timing = time_run(&loaded, engine, rtol, repeat)?;
+        let (error, relative) = max_deviation(
+            &loaded,
+            &timing.trajectory,
+            &reference.trajectory,
+            &args.signal,
+        )?;
+        let p2p = p2p_difference(
+            &loaded,
+            &timing.trajectory,
+            &reference.trajectory,
+            &args.signal,
+        )?;
+        let counts = timing.trajectory.stats.counts;
+        println!(
+            "| {} | {setting} | {:.3} | {:.1} | {} | {} | {error:.2e} | {relative:.2e} | {p2p:.2e} |",
+            engine.name(),
+            timing.wall_s,
+            simulated / timing.wall_s,
+            counts.steps,
+            counts.rhs_evaluations,
+        );
+        Ok(())
+    };
+    for rtol in [1e-6, 1e-8] {
+        row(&native, format!("rtol {rtol:.0e}"), rtol)?;
+    }
+    let x0 = initial_state(&loaded.model, &loaded.scenario)?;
+    let excitation = ScenarioExcitation::from_scenario(&loaded.scenario);
+    let (dt, _) = rapier_step(
+        &loaded.model,
+        &x0,
+        &excitation.inputs(0.0),
+        &loaded.scenario.rapier,
+        1.0 / loaded.scenario.sample_rate,
+    );
+    for divisor in [1.0, 2.0, 4.0] {
+        let mut engine = RapierEngine {
+            settings: loaded.scenario.rapier.clone(),
+        };
+        engine.settings.dt = Some(dt / divisor);
+        let label = if divisor == 1.0 {
+            format!("dt {:.2e} s (default)", dt)
+        } else {
+            format!("dt {:.2e} s", dt / divisor)
+        };
+        // The tolerance is unused by the fixed-step engine.
+        row(&engine, label, loaded.scenario.solver.rtol)?;
     }
     Ok(())
 }
