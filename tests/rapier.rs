@@ -239,3 +239,60 @@ fn payload_stays_put_with_friction_and_slides_as_coulomb_predicts_without() {
         "rapier {slip:e} vs Coulomb {predicted:e}"
     );
 }
+
+const CART_PENDULUM: &str = r#"<robot name="cart_pendulum">
+  <link name="world"/>
+  <link name="cart"><inertial><mass value="3.0"/><inertia ixx="1e-2" ixy="0" ixz="0" iyy="1e-2" iyz="0" izz="1e-2"/></inertial></link>
+  <link name="rod"><inertial><origin xyz="0 0 -0.4"/><mass value="0.7"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial></link>
+  <joint name="cart_x" type="prismatic"><parent link="world"/><child link="cart"/><axis xyz="1 0 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+  <joint name="swing" type="continuous"><origin xyz="0 0 0.05"/><parent link="cart"/><child link="rod"/><axis xyz="0 1 0"/></joint>
+</robot>"#;
+
+/// A revolute joint below a prismatic one, with a point mass (zero inertia
+/// about its centre): rapier swings at the closed-form frequency
+/// w^2 = g (M + m) / (M L) and keeps the horizontal momentum.
+#[test]
+fn pendulum_on_a_cart_swings_at_the_closed_form_frequency() {
+    let robot = RobotSpec::from_str(CART_PENDULUM, Path::new("cart.urdf")).expect("robot");
+    let scenario = Scenario::from_str("robot = \"x\"\nduration = 1\n", Path::new("cart.toml"))
+        .expect("scenario");
+    let model = assemble(robot, &scenario).expect("model").1;
+    let (cart, bob, length, g): (f64, f64, f64, f64) = (3.0, 0.7, 0.4, 9.81);
+    let omega = (g * (cart + bob) / (cart * length)).sqrt();
+    let amplitude = 1e-3;
+    let mut x0 = model.zero_state();
+    x0[1] = amplitude;
+    let still = ScenarioExcitation {
+        reference: Default::default(),
+        platform_velocity: 0.0,
+        servo_force: 0.0,
+    };
+    let settings = SimSettings {
+        t_end: 2.0,
+        sample_interval: 1e-3,
+        rtol: 1e-8,
+        atol_scale: 1.0,
+        max_step: None,
+        max_steps: 50_000_000,
+    };
+    let mut engine = RapierEngine::default();
+    engine.settings.dt = Some(1e-5);
+    let trajectory = engine
+        .simulate(&model, &x0, &still, &settings, &mut |_| {})
+        .expect("rapier");
+    let (mut worst_angle, mut worst_momentum) = (0.0_f64, 0.0_f64);
+    for (k, &t) in trajectory.times.iter().enumerate() {
+        let x = trajectory.state(k);
+        worst_angle = worst_angle.max((x[1] - amplitude * (omega * t).cos()).abs());
+        let momentum = (cart + bob) * x[2] - bob * length * x[1].cos() * x[3];
+        worst_momentum = worst_momentum.max(momentum.abs());
+    }
+    println!(
+        "rapier pendulum on cart: angle error {worst_angle:.2e} rad, momentum {worst_momentum:.2e}"
+    );
+    assert!(
+        worst_angle < 1e-2 * amplitude,
+        "angle deviates by {worst_angle} rad"
+    );
+    assert!(worst_momentum < 1e-9, "momentum drifts by {worst_momentum}");
+}

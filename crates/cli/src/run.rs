@@ -179,10 +179,15 @@ fn print_summary(loaded: &fistage_model::Loaded, output: &RunOutput) {
         );
     }
     let stats = &output.trajectory.stats;
+    // The fixed-step engine names its step in place of a tolerance.
+    let setting = if scenario.solver.engine == "rapier" {
+        String::new()
+    } else {
+        format!(" rtol {:e}", scenario.solver.rtol)
+    };
     println!(
-        "solver {} rtol {:e}: {} steps, {} rejected, {} rhs evaluations, {:.3} s wall",
+        "solver {}{setting}: {} steps, {} rejected, {} rhs evaluations, {:.3} s wall",
         stats.engine,
-        scenario.solver.rtol,
         stats.counts.steps,
         stats.counts.rejected,
         stats.counts.rhs_evaluations,

@@ -88,7 +88,8 @@ struct World {
     soft_bodies: SoftBodySet,
     ccd: CCDSolver,
     handles: Vec<RigidBodyHandle>,
-    joints: Vec<MultibodyJointHandle>,
+    /// (model body, its multibody joint).
+    joints: Vec<(usize, MultibodyJointHandle)>,
     payload: Option<Payload>,
 }
 
@@ -136,6 +137,19 @@ impl World {
     }
 }
 
+/// Smallest principal moment of inertia given to rapier, kg m^2: rapier reads a
+/// zero moment as an infinite one (no rotation about that axis), while a
+/// model's point mass (zero inertia about its centre) must still swing.
+const INERTIA_FLOOR: f64 = 1e-12;
+
+/// The body's inertia about its centre of mass with every principal moment at
+/// least [`INERTIA_FLOOR`].
+fn rapier_inertia(inertia: &Matrix3<f64>) -> Matrix3<f64> {
+    let eigen = inertia.symmetric_eigen();
+    let floored = eigen.eigenvalues.map(|m| m.max(INERTIA_FLOOR));
+    eigen.eigenvectors * Matrix3::from_diagonal(&floored) * eigen.eigenvectors.transpose()
+}
+
 fn body_builder(model: &Model, index: usize, motion: &BodyMotion) -> RigidBodyBuilder {
     let body = &model.bodies[index];
     let com_offset = motion.rotation * body.com;
@@ -149,7 +163,7 @@ fn body_builder(model: &Model, index: usize, motion: &BodyMotion) -> RigidBodyBu
         .additional_mass_properties(MassProperties::with_inertia_matrix(
             vector(&body.com),
             body.mass,
-            matrix(&body.inertia),
+            matrix(&rapier_inertia(&body.inertia)),
         ))
         .linear_damping(0.0)
         .angular_damping(0.0)
@@ -361,7 +375,7 @@ fn build_world(
                         model.bodies[index].joint.name
                     ))
                 })?;
-            world.joints.push(joint_handle);
+            world.joints.push((index, joint_handle));
         }
     }
     stop_colliders(model, settings, &mut world, ground)?;
@@ -374,12 +388,45 @@ fn build_world(
     world.parameters.dt = 0.0;
     world.step();
     world.parameters.dt = dt;
-    for handle in &world.joints {
+    for (_, handle) in &world.joints {
         if let Some((multibody, _)) = world.multibody_joints.get_mut(*handle) {
             multibody.damping_mut().fill(0.0);
         }
     }
+    set_joint_coordinates(model, x0, &mut world);
     Ok(world)
+}
+
+/// Puts rapier's multibody joints at the model's joint positions and rates:
+/// a multibody places its links from its own coordinates (zero when a joint
+/// is inserted), not from the poses the bodies were built with.
+fn set_joint_coordinates(model: &Model, x0: &[f64], world: &mut World) {
+    let nq = model.layout.nq;
+    let mut touched = Vec::new();
+    for &(index, handle) in &world.joints {
+        let joint = &model.bodies[index].joint;
+        let Some((multibody, link_id)) = world.multibody_joints.get_mut(handle) else {
+            continue;
+        };
+        let Some(link) = multibody.link(link_id) else {
+            continue;
+        };
+        let slot = link.assembly_id();
+        let mut displacement = vec![0.0; multibody.ndofs()];
+        if slot >= displacement.len() {
+            continue;
+        }
+        displacement[slot] = x0[joint.q_offset];
+        multibody.apply_displacements(&displacement);
+        multibody.generalized_velocity_mut()[slot] = x0[nq + joint.v_offset];
+        touched.push(handle);
+    }
+    for handle in touched {
+        if let Some((multibody, _)) = world.multibody_joints.get_mut(handle) {
+            multibody.forward_kinematics(&world.bodies, true);
+            multibody.update_rigid_bodies(&mut world.bodies, true);
+        }
+    }
 }
 
 /// Largest |eigenvalue| of the linearised model at (x, u).
