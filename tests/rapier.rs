@@ -296,3 +296,71 @@ fn pendulum_on_a_cart_swings_at_the_closed_form_frequency() {
     );
     assert!(worst_momentum < 1e-9, "momentum drifts by {worst_momentum}");
 }
+
+const CARRIER: &str = r#"<robot name="carrier">
+  <link name="world"/>
+  <link name="platform"><inertial><origin xyz="0.02 -0.01 0.03"/><mass value="2.0"/>
+    <inertia ixx="0.02" ixy="0.001" ixz="0" iyy="0.03" iyz="-0.002" izz="0.04"/></inertial></link>
+  <link name="slider"><inertial><origin xyz="0 0.01 0"/><mass value="0.5"/>
+    <inertia ixx="1e-3" ixy="0" ixz="0" iyy="2e-3" iyz="0" izz="2e-3"/></inertial></link>
+  <joint name="float" type="floating"><parent link="world"/><child link="platform"/></joint>
+  <joint name="slide" type="prismatic"><origin xyz="0.1 0 0.05"/><parent link="platform"/><child link="slider"/><axis xyz="1 0 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+</robot>"#;
+
+/// A floating platform carrying a prismatic slider (a joint below a floating
+/// body, an impulse joint in rapier), started moving and turning: rapier
+/// follows the native engine.
+#[test]
+fn moving_free_root_with_a_jointed_child_follows_native() {
+    let robot = RobotSpec::from_str(CARRIER, Path::new("carrier.urdf")).expect("robot");
+    let scenario = Scenario::from_str(
+        "robot = \"x\"\nduration = 1\ngravity = [0, 0, 0]\n",
+        Path::new("carrier.toml"),
+    )
+    .expect("scenario");
+    let model = assemble(robot, &scenario).expect("model").1;
+    let nq = model.layout.nq;
+    let mut x0 = model.zero_state();
+    let slide = model.layout.index("slide.q").expect("slide.q");
+    let slide_rate = model.layout.index("slide.v").expect("slide.v");
+    x0[slide] = 0.01;
+    x0[slide_rate] = 0.05;
+    x0[nq..nq + 6].copy_from_slice(&[0.1, 0.02, -0.03, 0.3, -0.2, 0.5]);
+    let still = ScenarioExcitation {
+        reference: Default::default(),
+        platform_velocity: 0.0,
+        servo_force: 0.0,
+    };
+    let settings = SimSettings {
+        t_end: 0.5,
+        sample_interval: 1e-2,
+        rtol: 1e-11,
+        atol_scale: 1e-2,
+        max_step: None,
+        max_steps: 10_000_000,
+    };
+    let native = NativeEngine
+        .simulate(&model, &x0, &still, &settings, &mut |_| {})
+        .expect("native");
+    let mut engine = RapierEngine::default();
+    engine.settings.dt = Some(1e-5);
+    let rapier = engine
+        .simulate(&model, &x0, &still, &settings, &mut |_| {})
+        .expect("rapier");
+    let (a, b) = (rapier.last_state(), native.last_state());
+    let position = (Vector3::new(a[0], a[1], a[2]) - Vector3::new(b[0], b[1], b[2])).norm();
+    let slider = (a[slide] - b[slide]).abs();
+    println!(
+        "free root after 0.5 s: platform {position:.2e} m apart, slider {slider:.2e} m apart (moved {:.3e} m)",
+        (b[slide] - x0[slide]).abs()
+    );
+    assert!(
+        (Vector3::new(b[0], b[1], b[2])).norm() > 0.04,
+        "the platform moves"
+    );
+    assert!(
+        position < 1e-5,
+        "platform positions differ by {position:e} m"
+    );
+    assert!(slider < 1e-5, "slider positions differ by {slider:e} m");
+}

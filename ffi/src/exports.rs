@@ -62,7 +62,12 @@ fn with_slot(
     }
     let address = c as usize;
     if !lock(&LIVE).contains(&address) {
-        if let Some((_, logger)) = lock(&FREED).iter().find(|(a, _)| *a == address) {
+        // Copy the logger out so no lock is held while the importer's code runs.
+        let freed = lock(&FREED)
+            .iter()
+            .find(|(a, _)| *a == address)
+            .map(|(_, logger)| logger.clone());
+        if let Some(logger) = freed {
             logger.error(
                 Status::Error,
                 &format!("{call}: the instance was already freed by fmi2FreeInstance"),
@@ -166,6 +171,14 @@ fn text(pointer: fmi2String) -> Option<String> {
 
 /// The folder a `file:` URI names (FMPy passes `file:///...`).
 pub(crate) fn resource_folder(uri: &str) -> Result<PathBuf, String> {
+    if let Some(authority) = uri.strip_prefix("file://")
+        && !authority.starts_with('/')
+        && !authority.starts_with("localhost/")
+    {
+        return Err(format!(
+            "resourceLocation \"{uri}\" names a remote host; only local file: URIs are supported"
+        ));
+    }
     let rest = uri
         .strip_prefix("file://localhost/")
         .map(|r| format!("/{r}"))
@@ -218,6 +231,7 @@ pub unsafe extern "C" fn fmi2SetDebugLogging(
     with_slot(c, "fmi2SetDebugLogging", |slot| {
         // SAFETY: by the caller's guarantee.
         let categories = unsafe { input_slice(categories, nCategories, "categories") }?;
+        let mut names = Vec::with_capacity(categories.len());
         for &category in categories {
             let name = text(category).ok_or_else(|| {
                 CallError::InvalidArgument("a log category is a null pointer".into())
@@ -228,8 +242,13 @@ pub unsafe extern "C" fn fmi2SetDebugLogging(
                     LOG_CATEGORIES.map(|(n, _)| n).join(", ")
                 )));
             }
+            names.push(name);
         }
-        slot.logger.debug = loggingOn != 0;
+        // Errors are always reported; the switch concerns the call trace
+        // (category logCalls), named or implied by an empty list.
+        if names.is_empty() || names.iter().any(|n| n == "logCalls") {
+            slot.logger.debug = loggingOn != 0;
+        }
         Ok(Status::Ok)
     })
 }
@@ -298,10 +317,20 @@ pub unsafe extern "C" fn fmi2Instantiate(
     let logger = unsafe { Logger::new(functions, &name, loggingOn != 0) };
     let guid = text(fmuGUID);
     let resources = text(fmuResourceLocation);
+    let reporter = logger.clone();
     catch_unwind(AssertUnwindSafe(|| {
         instantiate(fmuType, guid, resources, logger)
     }))
-    .unwrap_or(std::ptr::null_mut())
+    .unwrap_or_else(|payload| {
+        reporter.error(
+            Status::Fatal,
+            &format!(
+                "fmi2Instantiate: internal error ({})",
+                panic_text(payload.as_ref())
+            ),
+        );
+        std::ptr::null_mut()
+    })
 }
 
 /// fmi2FreeInstance. A second call with the same pointer is detected and ignored.

@@ -7,7 +7,9 @@
 use std::path::Path;
 
 use fistage_model::{Inputs, LoadError, Model, RobotSpec, Scenario, Workspace, assemble};
-use fistage_sim::{Checkpoint, Excitation, HeldInputs, Stepper, StepperTolerances, initial_state};
+use fistage_sim::{
+    Checkpoint, Excitation, HeldInputs, Stepper, StepperTolerances, initial_state_with,
+};
 use thiserror::Error;
 
 use crate::model_description::{Capabilities, model_description};
@@ -295,18 +297,7 @@ impl Instance {
     pub fn exit_initialization(&mut self) -> Result<(), CallError> {
         self.require("fmi2ExitInitializationMode", &[Phase::Initialization])?;
         let x0 = self.initial_state()?;
-        let rtol = self.tolerance.unwrap_or(self.source.scenario.solver.rtol);
-        let solver = &self.source.scenario.solver;
-        self.stepper = Some(Stepper::new(
-            self.start_time,
-            x0,
-            StepperTolerances {
-                rtol,
-                atol_scale: solver.atol_scale,
-                max_step: solver.max_step,
-                max_steps_per_advance: MAX_STEPS_PER_COMMUNICATION_STEP,
-            },
-        ));
+        self.stepper = Some(Stepper::new(self.start_time, x0, self.stepper_tolerances()));
         self.initial = None;
         self.outputs_valid = false;
         self.phase = Phase::StepComplete;
@@ -404,11 +395,23 @@ impl Instance {
         }
     }
 
+    /// The scenario's start (`zero`, `static` or `slipping`), with equilibria
+    /// taken at the inputs the importer set, at the start time.
     fn initial_state(&mut self) -> Result<Vec<f64>, CallError> {
         self.rebuild_model()?;
-        let mut scenario = self.source.scenario.clone();
-        scenario.platform_velocity = self.held_inputs().held.platform_velocity;
-        initial_state(&self.model, &scenario).map_err(|e| CallError::Model(e.to_string()))
+        let inputs = self.held_inputs().inputs(self.start_time);
+        initial_state_with(&self.model, &self.source.scenario, &inputs)
+            .map_err(|e| CallError::Model(e.to_string()))
+    }
+
+    fn stepper_tolerances(&self) -> StepperTolerances {
+        let solver = &self.source.scenario.solver;
+        StepperTolerances {
+            rtol: self.tolerance.unwrap_or(solver.rtol),
+            atol_scale: solver.atol_scale,
+            max_step: solver.max_step,
+            max_steps_per_advance: MAX_STEPS_PER_COMMUNICATION_STEP,
+        }
     }
 
     /// The state the outputs are computed from.
@@ -529,6 +532,11 @@ impl Instance {
             )));
         }
         let target = communication_point + step;
+        if target <= now {
+            return Err(CallError::InvalidArgument(format!(
+                "step {step} from {communication_point} does not pass the unit's time {now}"
+            )));
+        }
         if let Some(stop) = self.stop_time
             && target > stop + 1e-9 * stop.abs().max(1.0)
         {
@@ -588,21 +596,31 @@ impl Instance {
                 phase: self.phase,
             });
         }
-        if snapshot.values.len() != self.values.len()
-            || snapshot
-                .checkpoint
-                .as_ref()
-                .is_some_and(|c| c.x.len() != self.model.n_states())
-        {
+        if snapshot.values.len() != self.values.len() {
             return Err(CallError::InvalidArgument(
                 "the FMU state belongs to a different unit".into(),
             ));
         }
-        let previous = (self.values.clone(), self.phase);
+        // Parameters first: they decide the state layout (k_i adds a state).
+        let previous = self.values.clone();
         self.values = snapshot.values.clone();
-        if let Err(error) = self.rebuild_model() {
-            (self.values, self.phase) = previous;
-            return Err(error);
+        let fits = self.rebuild_model().map(|()| {
+            snapshot
+                .checkpoint
+                .as_ref()
+                .is_none_or(|c| c.x.len() == self.model.n_states())
+        });
+        match fits {
+            Ok(true) => {}
+            Ok(false) | Err(_) => {
+                self.values = previous;
+                self.rebuild_model()?;
+                return Err(fits.err().unwrap_or_else(|| {
+                    CallError::InvalidArgument(
+                        "the FMU state's state vector does not fit this unit".into(),
+                    )
+                }));
+            }
         }
         self.phase = snapshot.phase;
         self.start_time = snapshot.start_time;
@@ -610,25 +628,15 @@ impl Instance {
         self.tolerance = snapshot.tolerance;
         self.initial = None;
         self.outputs_valid = false;
-        match (&snapshot.checkpoint, self.stepper.as_mut()) {
-            (Some(checkpoint), Some(stepper)) => stepper.restore(checkpoint.clone()),
-            (Some(checkpoint), None) => {
-                let solver = &self.source.scenario.solver;
-                let mut stepper = Stepper::new(
-                    checkpoint.t,
-                    checkpoint.x.clone(),
-                    StepperTolerances {
-                        rtol: self.tolerance.unwrap_or(solver.rtol),
-                        atol_scale: solver.atol_scale,
-                        max_step: solver.max_step,
-                        max_steps_per_advance: MAX_STEPS_PER_COMMUNICATION_STEP,
-                    },
-                );
-                stepper.restore(checkpoint.clone());
-                self.stepper = Some(stepper);
-            }
-            (None, _) => self.stepper = None,
-        }
+        self.stepper = snapshot.checkpoint.as_ref().map(|checkpoint| {
+            let mut stepper = Stepper::new(
+                checkpoint.t,
+                checkpoint.x.clone(),
+                self.stepper_tolerances(),
+            );
+            stepper.restore(checkpoint.clone());
+            stepper
+        });
         Ok(())
     }
 

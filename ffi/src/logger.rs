@@ -20,6 +20,7 @@ pub const LOG_CATEGORIES: [(&str, &str); 2] = [
 ];
 
 /// The importer's logger and what identifies this instance to it.
+#[derive(Clone)]
 pub(crate) struct Logger {
     callback: fmi2CallbackLogger,
     environment: fmi2ComponentEnvironment,

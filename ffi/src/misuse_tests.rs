@@ -508,3 +508,80 @@ fn random_call_sequences_never_crash() {
     assert_eq!(time, 0.1);
     fmi2FreeInstance(unit.c);
 }
+
+#[test]
+fn resource_locations_in_the_forms_importers_use() {
+    use crate::exports::resource_folder;
+    for (uri, path) in [
+        ("file:///tmp/unit/resources", "/tmp/unit/resources"),
+        ("file:/tmp/unit/resources/", "/tmp/unit/resources/"),
+        ("file://localhost/tmp/unit", "/tmp/unit"),
+        ("file:///tmp/with%20space", "/tmp/with space"),
+    ] {
+        assert_eq!(resource_folder(uri), Ok(PathBuf::from(path)), "{uri}");
+    }
+    for uri in [
+        "file://server/share/unit",
+        "http://example.org/unit",
+        "/tmp/unit",
+    ] {
+        assert!(resource_folder(uri).is_err(), "{uri}");
+    }
+}
+
+/// A state saved with an integral gain (one more state) restores into an
+/// instance that started without one, and both continue identically.
+#[test]
+fn a_state_with_another_layout_restores_after_its_parameters() {
+    let log = Log::default();
+    let saver = instantiate(&log, "layout_a");
+    let k_i = 2; // value reference of controller.k_i
+    // SAFETY: valid pointers throughout.
+    unsafe {
+        assert_eq!(fmi2SetReal(saver.c, &k_i, 1, &1e5), OK);
+        assert_eq!(fmi2EnterInitializationMode(saver.c), OK);
+        assert_eq!(fmi2ExitInitializationMode(saver.c), OK);
+        for k in 0..20 {
+            assert_eq!(fmi2DoStep(saver.c, k as f64 * 1e-3, 1e-3, 0), OK);
+        }
+        let mut state: fmi2FMUstate = std::ptr::null_mut();
+        assert_eq!(fmi2GetFMUstate(saver.c, &mut state), OK);
+        let mut size = 0usize;
+        assert_eq!(fmi2SerializedFMUstateSize(saver.c, state, &mut size), OK);
+        let mut bytes = vec![0 as c_char; size];
+        assert_eq!(
+            fmi2SerializeFMUstate(saver.c, state, bytes.as_mut_ptr(), size),
+            OK
+        );
+
+        let other = initialised(&log, "layout_b");
+        let mut restored: fmi2FMUstate = std::ptr::null_mut();
+        assert_eq!(
+            fmi2DeSerializeFMUstate(other.c, bytes.as_ptr(), size, &mut restored),
+            OK
+        );
+        assert_eq!(
+            fmi2SetFMUstate(other.c, restored),
+            OK,
+            "{:?}",
+            log.borrow().last()
+        );
+        let mut gain = 0.0;
+        assert_eq!(fmi2GetReal(other.c, &k_i, 1, &mut gain), OK);
+        assert_eq!(gain, 1e5);
+        let position = 3 + 6 + 12 + 4; // encoder.position, the first output
+        for k in 20..40 {
+            let t = k as f64 * 1e-3;
+            assert_eq!(fmi2DoStep(saver.c, t, 1e-3, 0), OK);
+            assert_eq!(fmi2DoStep(other.c, t, 1e-3, 0), OK);
+        }
+        let (mut a, mut b) = (0.0, 0.0);
+        assert_eq!(fmi2GetReal(saver.c, &position, 1, &mut a), OK);
+        assert_eq!(fmi2GetReal(other.c, &position, 1, &mut b), OK);
+        assert_eq!(a.to_bits(), b.to_bits());
+        assert_ne!(a, 0.0);
+        fmi2FreeFMUstate(saver.c, &mut state);
+        fmi2FreeInstance(other.c);
+    }
+    fmi2FreeInstance(saver.c);
+}

@@ -87,6 +87,18 @@ fn scalar_variable(variable: &Variable) -> String {
     )
 }
 
+/// Whether a name follows FMI's structured naming: identifiers
+/// (`[A-Za-z_][A-Za-z0-9_]*`) joined by dots.
+fn is_structured(name: &str) -> bool {
+    name.split('.').all(|part| {
+        let mut chars = part.chars();
+        chars
+            .next()
+            .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+            && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
+    })
+}
+
 /// A 128-bit FNV-1a hash of the text, as an FMI GUID.
 fn guid(text: &str) -> String {
     let hash = |seed: u64| {
@@ -152,8 +164,15 @@ pub fn model_description(model: &Model, scenario: &Scenario, capabilities: Capab
     } else {
         scenario.title.clone()
     };
+    // Element names from the robot file may not be identifiers (a dash, a
+    // space): then the names are declared flat.
+    let convention = if variables.iter().all(|v| is_structured(&v.name)) {
+        "structured"
+    } else {
+        "flat"
+    };
     let head = format!(
-        "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"{}\" description=\"{}\" generationTool=\"fistage {}\" variableNamingConvention=\"structured\" numberOfEventIndicators=\"0\"",
+        "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"{}\" description=\"{}\" generationTool=\"fistage {}\" variableNamingConvention=\"{convention}\" numberOfEventIndicators=\"0\"",
         escape(&model.name),
         escape(&title),
         env!("CARGO_PKG_VERSION"),
@@ -168,4 +187,19 @@ pub fn model_description(model: &Model, scenario: &Scenario, capabilities: Capab
     format!(
         "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n{head} guid=\"{identity}\">\n{cosimulation}{body}</fmiModelDescription>\n"
     )
+}
+
+#[cfg(test)]
+mod naming_tests {
+    use super::is_structured;
+
+    #[test]
+    fn structured_names_are_dotted_identifiers() {
+        for name in ["controller.k", "friction_fl.sigma0", "table.x", "_a.b1"] {
+            assert!(is_structured(name), "{name}");
+        }
+        for name in ["rail-fl.q", "my table.x", "1st.q", "a..b", ""] {
+            assert!(!is_structured(name), "{name}");
+        }
+    }
 }

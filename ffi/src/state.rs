@@ -161,6 +161,16 @@ pub fn decode(guid: &str, bytes: &[u8]) -> Result<Snapshot, String> {
         }
         other => return Err(format!("FMU state is corrupt: checkpoint flag {other}")),
     };
+    if phase == Phase::Fatal {
+        return Err("FMU state is corrupt: it records a fatal error".into());
+    }
+    if matches!(
+        phase,
+        Phase::StepComplete | Phase::StepFailed | Phase::Terminated
+    ) && checkpoint.is_none()
+    {
+        return Err("FMU state is corrupt: a stepping phase without a state vector".into());
+    }
     if r.at != bytes.len() {
         return Err(format!(
             "FMU state has {} bytes after its end",

@@ -243,7 +243,9 @@ pub struct PayloadSettings {
     pub size: [f64; 3],
     /// Mass, kg (uniform density).
     pub mass: f64,
-    /// Centre of the box in the link frame at the start, m.
+    /// Centre of the box at the start, m, in the frame of the body that
+    /// carries the link (the link's own frame unless fixed joints merged it
+    /// into another link's body).
     pub position: [f64; 3],
     /// Coulomb friction coefficient of the contact.
     #[serde(default = "default_payload_friction")]

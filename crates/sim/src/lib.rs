@@ -21,5 +21,5 @@ pub use engine::{
 };
 pub use metrics::{SignalSummary, WindowStats, summarize, window_stats};
 pub use rapier_engine::RapierEngine;
-pub use run::{RunError, RunOutput, initial_state, run_scenario};
+pub use run::{RunError, RunOutput, initial_state, initial_state_with, run_scenario};
 pub use trajectory::{ExtraSignal, SignalTable, SolverStats, Trajectory};

@@ -1,6 +1,8 @@
 //! The second engine: rapier3d-f64 integrates the rigid bodies (fixed step,
-//! semi-implicit Euler, reduced-coordinate multibody joints for the model's
-//! prismatic and revolute joints, free bodies for floating joints), while the
+//! semi-implicit Euler; the model's prismatic and revolute joints as
+//! reduced-coordinate multibody joints where the chain to the world has no
+//! floating joint, as impulse joints below a floating body; free bodies for
+//! floating joints), while the
 //! force elements (isolators, LuGre contacts, servo) are the model's own code
 //! ([`Model::element_wrenches`]), applied as external forces every step; the
 //! bristle and integrator states advance with the rates the model gives. No
@@ -353,6 +355,7 @@ fn build_world(
         payload: None,
     };
     let ground = world.bodies.insert(RigidBodyBuilder::fixed());
+    let grounded = grounded_bodies(model);
     for (index, motion) in motions.iter().enumerate() {
         if model.bodies[index].mass.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             return Err(SimError::InvalidSettings(format!(
@@ -366,16 +369,22 @@ fn build_world(
             let parent = model.bodies[index]
                 .parent
                 .map_or(ground, |p| world.handles[p]);
-            let joint_handle = world
-                .multibody_joints
-                .insert(parent, handle, joint, true)
-                .ok_or_else(|| {
-                    SimError::InvalidSettings(format!(
-                        "joint \"{}\" would close a loop in rapier's multibody",
-                        model.bodies[index].joint.name
-                    ))
-                })?;
-            world.joints.push((index, joint_handle));
+            if grounded[index] {
+                let joint_handle = world
+                    .multibody_joints
+                    .insert(parent, handle, joint, true)
+                    .ok_or_else(|| {
+                        SimError::InvalidSettings(format!(
+                            "joint \"{}\" would close a loop in rapier's multibody",
+                            model.bodies[index].joint.name
+                        ))
+                    })?;
+                world.joints.push((index, joint_handle));
+            } else {
+                // Below a floating body: an impulse joint between two bodies
+                // that keep the poses and velocities they were built with.
+                world.impulse_joints.insert(parent, handle, joint, true);
+            }
         }
     }
     stop_colliders(model, settings, &mut world, ground)?;
@@ -395,6 +404,19 @@ fn build_world(
     }
     set_joint_coordinates(model, x0, &mut world);
     Ok(world)
+}
+
+/// Bodies joined to the world by a chain without floating joints: their
+/// joints become reduced-coordinate multibody joints rooted at the fixed
+/// ground. Joints below a floating body become impulse joints (a multibody
+/// with a free root would restart that root's motion from rest).
+fn grounded_bodies(model: &Model) -> Vec<bool> {
+    let mut grounded = vec![false; model.bodies.len()];
+    for (index, body) in model.bodies.iter().enumerate() {
+        let free = matches!(body.joint.motion, JointMotion::Floating);
+        grounded[index] = !free && body.parent.is_none_or(|p| grounded[p]);
+    }
+    grounded
 }
 
 /// Puts rapier's multibody joints at the model's joint positions and rates:
@@ -440,7 +462,28 @@ pub fn fastest_rate(model: &Model, x: &[f64], inputs: &Inputs) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// The fixed step for a run: `settings.dt`, or a fraction of 2 / |lambda|max,
+/// Slip speed assumed for the bristle stiffness bound when the inputs at the
+/// start name no faster one, m/s.
+const BRISTLE_SPEED_FLOOR: f64 = 0.01;
+
+/// Largest bristle rate sigma0 |v| / f_C any contact can reach at the slip
+/// speed the inputs suggest (the linearisation at rest, where |v| = 0, does
+/// not see it).
+fn bristle_rate_bound(model: &Model, inputs: &Inputs) -> f64 {
+    let speed = inputs
+        .platform_velocity
+        .abs()
+        .max(inputs.reference.velocity.abs())
+        .max(BRISTLE_SPEED_FLOOR);
+    model
+        .frictions
+        .iter()
+        .map(|f| f.lugre.sigma0 * speed / f.lugre.f_c)
+        .fold(0.0, f64::max)
+}
+
+/// The fixed step for a run: `settings.dt`, or a fraction of 2 / |lambda|max
+/// (the fastest mode at the start, or the bristle bound if faster),
 /// shortened so that a whole number of steps fits each output interval.
 pub fn rapier_step(
     model: &Model,
@@ -451,7 +494,7 @@ pub fn rapier_step(
 ) -> (f64, usize) {
     let wanted = rapier.dt.unwrap_or_else(|| {
         let fraction = rapier.step_fraction.unwrap_or(DEFAULT_STEP_FRACTION);
-        let rate = fastest_rate(model, x0, inputs);
+        let rate = fastest_rate(model, x0, inputs).max(bristle_rate_bound(model, inputs));
         if rate > 0.0 {
             fraction * 2.0 / rate
         } else {
@@ -467,6 +510,40 @@ pub fn rapier_step(
 pub struct RapierEngine {
     /// The scenario's `[rapier]` table.
     pub settings: RapierSettings,
+}
+
+impl RapierEngine {
+    /// One step of length h from the current state x: the model's element
+    /// wrenches as rapier forces, explicit Euler for the bristle and
+    /// integrator states, then rapier's step.
+    #[allow(clippy::too_many_arguments)]
+    fn advance(
+        &self,
+        model: &Model,
+        world: &mut World,
+        x: &mut [f64],
+        ws: &mut fistage_model::Workspace,
+        wrenches: &mut [BodyWrench],
+        inputs: &Inputs,
+        motions: &mut [BodyMotion],
+        h: f64,
+    ) {
+        world.motions(model, motions);
+        model.set_joint_state(motions, x);
+        model.element_wrenches(x, inputs, ws, wrenches);
+        for (handle, wrench) in world.handles.iter().zip(wrenches.iter()) {
+            let rb = &mut world.bodies[*handle];
+            let com = vector3(rb.center_of_mass());
+            rb.reset_forces(false);
+            rb.reset_torques(false);
+            rb.add_force(vector(&wrench.force), true);
+            rb.add_torque(vector(&wrench.moment_about(&com)), true);
+        }
+        for (index, rate) in model.internal_rates(ws) {
+            x[index] += h * rate;
+        }
+        world.step();
+    }
 }
 
 impl Engine for RapierEngine {
@@ -492,7 +569,7 @@ impl Engine for RapierEngine {
             settings.sample_interval,
         );
         let times = sample_times(settings.t_end, settings.sample_interval);
-        let total_steps = ((settings.t_end / dt).round() as u64).max(1);
+        let total_steps = ((settings.t_end / dt).ceil() as u64).max(1);
         if total_steps > settings.max_steps {
             return Err(SimError::TooManySteps {
                 t: 0.0,
@@ -527,47 +604,49 @@ impl Engine for RapierEngine {
             model.bodies.len()
         ];
         let mut counts = StepCounts::default();
-        let mut next_sample = 0;
-        let mut step: u64 = 0;
-        loop {
-            let t = step as f64 * dt;
+        for (k, &t_sample) in times.iter().enumerate() {
+            if k > 0 {
+                // Whole steps of dt between grid samples; a final sample off
+                // the grid (t_end) gets equal shorter steps.
+                let start = times[k - 1];
+                let span = t_sample - start;
+                let steps = ((span / dt) * (1.0 - 1e-12)).ceil().max(1.0) as usize;
+                let h = if steps == per_sample {
+                    dt
+                } else {
+                    span / steps as f64
+                };
+                world.parameters.dt = h;
+                for j in 0..steps {
+                    let t = start + j as f64 * h;
+                    self.advance(
+                        model,
+                        &mut world,
+                        &mut x,
+                        &mut ws,
+                        &mut wrenches,
+                        &excitation.inputs(t),
+                        &mut motions,
+                        h,
+                    );
+                    counts.steps += 1;
+                    counts.rhs_evaluations += 1;
+                }
+                if k % 256 == 0 {
+                    progress(t_sample / settings.t_end);
+                }
+            }
             world.motions(model, &mut motions);
             model.set_joint_state(&motions, &mut x);
             if let Some(i) = x.iter().position(|v| !v.is_finite()) {
                 return Err(SimError::NonFinite {
-                    t,
+                    t: t_sample,
                     state: model.layout.names[i].clone(),
                 });
             }
-            while next_sample < times.len() && times[next_sample] <= t + 1e-9 * dt {
-                trajectory.push(times[next_sample], &x);
-                if let (Some(signals), Some(payload)) = (&mut payload_signals, &world.payload) {
-                    record_payload(&world, payload, &motions, signals);
-                }
-                next_sample += 1;
-            }
-            if next_sample >= times.len() || step >= total_steps {
-                break;
-            }
-            let inputs = excitation.inputs(t);
-            model.element_wrenches(&x, &inputs, &mut ws, &mut wrenches);
-            counts.rhs_evaluations += 1;
-            for (handle, wrench) in world.handles.iter().zip(&wrenches) {
-                let rb = &mut world.bodies[*handle];
-                let com = vector3(rb.center_of_mass());
-                rb.reset_forces(false);
-                rb.reset_torques(false);
-                rb.add_force(vector(&wrench.force), true);
-                rb.add_torque(vector(&wrench.moment_about(&com)), true);
-            }
-            for (index, rate) in model.internal_rates(&ws) {
-                x[index] += dt * rate;
-            }
-            world.step();
-            step += 1;
-            counts.steps += 1;
-            if step.is_multiple_of(per_sample as u64 * 256) {
-                progress(t / settings.t_end);
+            trajectory.push(t_sample, &x);
+            if let (Some(signals), Some(payload)) = (&mut payload_signals, &world.payload) {
+                record_payload(&world, payload, &motions, signals);
             }
         }
         progress(1.0);

@@ -39,6 +39,18 @@ pub struct RunOutput {
 
 /// The scenario's starting state (`start`), with its `[initial]` entries applied.
 pub fn initial_state(model: &Model, scenario: &Scenario) -> Result<Vec<f64>, LoadError> {
+    let inputs = ScenarioExcitation::from_scenario(scenario).inputs(0.0);
+    initial_state_with(model, scenario, &inputs)
+}
+
+/// [`initial_state`] with the equilibrium (`start = "static"` or
+/// `"slipping"`) taken at the given inputs, e.g. those a co-simulation master
+/// set before initialisation.
+pub fn initial_state_with(
+    model: &Model,
+    scenario: &Scenario,
+    inputs: &fistage_model::Inputs,
+) -> Result<Vec<f64>, LoadError> {
     let mut x = model.zero_state();
     let kind = match scenario.start {
         Start::Zero => None,
@@ -46,9 +58,8 @@ pub fn initial_state(model: &Model, scenario: &Scenario) -> Result<Vec<f64>, Loa
         Start::Slipping => Some(EquilibriumKind::Slipping),
     };
     if let Some(kind) = kind {
-        let inputs = ScenarioExcitation::from_scenario(scenario).inputs(0.0);
         x = model
-            .equilibrium(kind, &inputs, &x)
+            .equilibrium(kind, inputs, &x)
             .map_err(|e| scenario.error("start", e.to_string()))?;
     }
     for (name, value) in &scenario.initial {
