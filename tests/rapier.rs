@@ -364,3 +364,33 @@ fn moving_free_root_with_a_jointed_child_follows_native() {
     );
     assert!(slider < 1e-5, "slider positions differ by {slider:e} m");
 }
+
+/// A run whose length is not a whole number of output intervals ends with a
+/// sample at exactly its end time, as the native engine's does.
+#[test]
+fn off_grid_end_time_gets_its_own_sample() {
+    let loaded = load("scenarios/paper/fig05b_fi.toml");
+    let model = &loaded.model;
+    let x0 = fistage_sim::initial_state(model, &loaded.scenario).expect("initial state");
+    let excitation = ScenarioExcitation::from_scenario(&loaded.scenario);
+    let settings = SimSettings {
+        t_end: 0.01005,
+        sample_interval: 1e-3,
+        rtol: 1e-8,
+        atol_scale: 1.0,
+        max_step: None,
+        max_steps: 10_000_000,
+    };
+    let mut engine = RapierEngine::default();
+    engine.settings.dt = Some(2e-4);
+    let rapier = engine
+        .simulate(model, &x0, &excitation, &settings, &mut |_| {})
+        .expect("rapier");
+    let native = NativeEngine
+        .simulate(model, &x0, &excitation, &settings, &mut |_| {})
+        .expect("native");
+    assert_eq!(rapier.times, native.times);
+    assert_eq!(rapier.times.last().copied(), Some(0.01005));
+    // 50 steps of 0.2 ms, then one of 0.05 ms.
+    assert_eq!(rapier.stats.counts.steps, 51);
+}
