@@ -41,6 +41,11 @@ pub struct BenchArgs {
     /// the four-bearing traverse, or on `--scenario`.
     #[arg(long)]
     pub engines: bool,
+    /// Explicit (native) against linearly implicit (rosenbrock) engine on the
+    /// four-bearing traverse with its isolators' five stiff directions scaled
+    /// by 1, 10, 100 and 1000.
+    #[arg(long)]
+    pub stiffness: bool,
     /// Python with FMPy for the FMU table (default: the test environment's,
     /// `target/fmi-venv/bin/python`, else `python3`).
     #[arg(long)]
@@ -147,6 +152,9 @@ fn max_deviation(
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     if args.fmu {
         return crate::bench_fmu::fmu_table(&fmu_python(args), args.repeat.min(5));
+    }
+    if args.stiffness {
+        return stiffness_table(args);
     }
     if args.engines {
         let scenarios = match &args.scenario {
@@ -394,6 +402,72 @@ fn engines_table(args: &BenchArgs, scenario: &Path) -> anyhow::Result<()> {
         };
         // The tolerance is unused by the fixed-step engine.
         row(&engine, label, loaded.scenario.solver.rtol)?;
+    }
+    Ok(())
+}
+
+/// Native and Rosenbrock engines as the isolators' stiff directions (y, z and
+/// the three rotations) are made stiffer: where explicit steps stop paying.
+fn stiffness_table(args: &BenchArgs) -> anyhow::Result<()> {
+    let scenario = args
+        .scenario
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("scenarios/coupling/friction20_traverse.toml"));
+    let base = fistage_model::load(&scenario)?;
+    let rtol = args.rtol.first().copied().unwrap_or(1e-6);
+    let repeat = args.repeat.min(3);
+    println!(
+        "`{}` ({} s simulated, rtol {rtol:e}, median of {repeat} runs; `{}` statistics over the window {:?} s)\n",
+        scenario.display(),
+        base.scenario.duration,
+        args.signal,
+        base.scenario.window
+    );
+    println!(
+        "| stiff directions x | engine | wall s | steps | rejected | RHS evals (incl. Jacobians) | p2p of signal | mean of signal |"
+    );
+    println!("|---|---|---|---|---|---|---|---|");
+    for factor in [1.0, 10.0, 100.0, 1000.0] {
+        let mut robot = base.robot.clone();
+        for isolator in &mut robot.isolators {
+            for k in &mut isolator.stiffness[1..] {
+                *k *= factor;
+            }
+        }
+        let (robot, model) = fistage_model::assemble(robot, &base.scenario)?;
+        let loaded = Loaded {
+            scenario: base.scenario.clone(),
+            robot,
+            model,
+        };
+        let engines: [&dyn Engine; 2] =
+            [&fistage_sim::NativeEngine, &fistage_sim::RosenbrockEngine];
+        for engine in engines {
+            let timing = time_run(&loaded, engine, rtol, repeat)?;
+            let excitation = ScenarioExcitation::from_scenario(&loaded.scenario);
+            let table = timing.trajectory.signals(&loaded.model, &excitation);
+            let summary = fistage_sim::summarize(
+                &table,
+                loaded.scenario.window[0],
+                loaded.scenario.window[1],
+            );
+            let stats = summary
+                .iter()
+                .find(|s| s.name == args.signal)
+                .map(|s| s.stats)
+                .with_context(|| format!("no signal {}", args.signal))?;
+            let counts = timing.trajectory.stats.counts;
+            println!(
+                "| {factor} | {} | {:.3} | {} | {} | {} | {:.5e} | {:.5e} |",
+                engine.name(),
+                timing.wall_s,
+                counts.steps,
+                counts.rejected,
+                counts.rhs_evaluations,
+                stats.peak_to_peak,
+                stats.mean,
+            );
+        }
     }
     Ok(())
 }

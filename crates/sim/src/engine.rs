@@ -8,7 +8,8 @@ use std::time::Instant;
 use fistage_model::{Inputs, Model, Reference, Scenario, Workspace};
 use thiserror::Error;
 
-use crate::dopri::{DormandPrince, OdeSystem, StepFailure, Tolerances};
+use crate::dopri::{DormandPrince, OdeSystem, StepCounts, StepFailure, Tolerances};
+use crate::rosenbrock::{JacobianSystem, Rosenbrock};
 use crate::trajectory::{SolverStats, Trajectory};
 
 /// What drives the model's inputs over time.
@@ -223,6 +224,149 @@ pub fn sample_times(t_end: f64, dt: f64) -> Vec<f64> {
     times
 }
 
+/// What the adaptive engines share: step to a stop time, restart after a
+/// discontinuity, interpolate inside the last step.
+trait Integrating {
+    fn time(&self) -> f64;
+    fn advance(&mut self, system: &mut ModelSystem, t_stop: f64) -> Result<(), StepFailure>;
+    fn restart(&mut self, system: &mut ModelSystem);
+    fn interpolate(&self, t: f64, out: &mut [f64]);
+    fn counts(&self) -> StepCounts;
+}
+
+impl Integrating for DormandPrince {
+    fn time(&self) -> f64 {
+        self.t
+    }
+    fn advance(&mut self, system: &mut ModelSystem, t_stop: f64) -> Result<(), StepFailure> {
+        self.step(system, t_stop)
+    }
+    fn restart(&mut self, system: &mut ModelSystem) {
+        DormandPrince::restart(self, system);
+    }
+    fn interpolate(&self, t: f64, out: &mut [f64]) {
+        DormandPrince::interpolate(self, t, out);
+    }
+    fn counts(&self) -> StepCounts {
+        self.counts
+    }
+}
+
+impl Integrating for Rosenbrock {
+    fn time(&self) -> f64 {
+        self.t
+    }
+    fn advance(&mut self, system: &mut ModelSystem, t_stop: f64) -> Result<(), StepFailure> {
+        self.step(system, t_stop)
+    }
+    fn restart(&mut self, system: &mut ModelSystem) {
+        Rosenbrock::restart(self, system);
+    }
+    fn interpolate(&self, t: f64, out: &mut [f64]) {
+        Rosenbrock::interpolate(self, t, out);
+    }
+    fn counts(&self) -> StepCounts {
+        self.counts
+    }
+}
+
+impl JacobianSystem for ModelSystem<'_> {
+    fn jacobian(&mut self, t: f64, x: &[f64]) -> nalgebra::DMatrix<f64> {
+        self.model.jacobian(x, &self.excitation.inputs(t))
+    }
+}
+
+fn tolerances(model: &Model, settings: &SimSettings) -> Tolerances {
+    Tolerances {
+        rtol: settings.rtol,
+        atol: model
+            .layout
+            .nominal
+            .iter()
+            .map(|s| s * settings.rtol * settings.atol_scale)
+            .collect(),
+        max_step: settings.max_step.unwrap_or(f64::INFINITY),
+        min_step_relative: 1e-14,
+    }
+}
+
+/// The loop of the adaptive engines: segments between the excitation's
+/// breakpoints, uniform samples by interpolation, step budget, progress.
+fn integrate<I: Integrating>(
+    engine: &'static str,
+    model: &Model,
+    x0: &[f64],
+    excitation: &dyn Excitation,
+    settings: &SimSettings,
+    progress: &mut dyn FnMut(f64),
+    start: impl FnOnce(&mut ModelSystem) -> I,
+) -> Result<Trajectory, SimError> {
+    check_settings(model, x0, settings)?;
+    let started = Instant::now();
+    let n = model.n_states();
+    let mut system = ModelSystem {
+        model,
+        excitation,
+        workspace: model.workspace(),
+    };
+    let times = sample_times(settings.t_end, settings.sample_interval);
+    let mut trajectory = Trajectory::with_capacity(n, times.len());
+    trajectory.push(0.0, x0);
+    let mut next_sample = 1;
+    let mut integrator = start(&mut system);
+    let mut segment_ends: Vec<f64> = excitation
+        .breakpoints()
+        .into_iter()
+        .filter(|&b| b > 0.0 && b < settings.t_end)
+        .collect();
+    segment_ends.sort_by(f64::total_cmp);
+    segment_ends.dedup();
+    segment_ends.push(settings.t_end);
+    let mut buffer = vec![0.0; n];
+    for (segment, &t_stop) in segment_ends.iter().enumerate() {
+        if segment > 0 {
+            integrator.restart(&mut system);
+        }
+        while integrator.time() < t_stop {
+            integrator
+                .advance(&mut system, t_stop)
+                .map_err(|failure| match failure {
+                    StepFailure::StepSizeUnderflow { t, h, non_finite } => {
+                        SimError::StepSizeUnderflow {
+                            t,
+                            h,
+                            non_finite: non_finite.map(|i| model.layout.names[i].clone()),
+                        }
+                    }
+                })?;
+            let counts = integrator.counts();
+            if counts.steps + counts.rejected > settings.max_steps {
+                return Err(SimError::TooManySteps {
+                    t: integrator.time(),
+                    steps: counts.steps,
+                });
+            }
+            while next_sample < times.len()
+                && times[next_sample] <= integrator.time() * (1.0 + 1e-14)
+            {
+                integrator.interpolate(times[next_sample], &mut buffer);
+                trajectory.push(times[next_sample], &buffer);
+                next_sample += 1;
+            }
+            if counts.steps.is_multiple_of(2048) {
+                progress(integrator.time() / settings.t_end);
+            }
+        }
+    }
+    progress(1.0);
+    trajectory.stats = SolverStats {
+        engine: engine.to_string(),
+        counts: integrator.counts(),
+        wall_time_s: started.elapsed().as_secs_f64(),
+    };
+    Ok(trajectory)
+}
+
 impl Engine for NativeEngine {
     fn name(&self) -> &'static str {
         "native"
@@ -236,81 +380,49 @@ impl Engine for NativeEngine {
         settings: &SimSettings,
         progress: &mut dyn FnMut(f64),
     ) -> Result<Trajectory, SimError> {
-        check_settings(model, x0, settings)?;
-        let started = Instant::now();
-        let n = model.n_states();
-        let mut system = ModelSystem {
+        let tol = tolerances(model, settings);
+        integrate(
+            self.name(),
             model,
+            x0,
             excitation,
-            workspace: model.workspace(),
-        };
-        let tolerances = Tolerances {
-            rtol: settings.rtol,
-            atol: model
-                .layout
-                .nominal
-                .iter()
-                .map(|s| s * settings.rtol * settings.atol_scale)
-                .collect(),
-            max_step: settings.max_step.unwrap_or(f64::INFINITY),
-            min_step_relative: 1e-14,
-        };
-        let times = sample_times(settings.t_end, settings.sample_interval);
-        let mut trajectory = Trajectory::with_capacity(n, times.len());
-        trajectory.push(0.0, x0);
-        let mut next_sample = 1;
-        let mut integrator = DormandPrince::new(&mut system, 0.0, x0, tolerances);
-        let mut segment_ends: Vec<f64> = excitation
-            .breakpoints()
-            .into_iter()
-            .filter(|&b| b > 0.0 && b < settings.t_end)
-            .collect();
-        segment_ends.sort_by(f64::total_cmp);
-        segment_ends.dedup();
-        segment_ends.push(settings.t_end);
-        let mut buffer = vec![0.0; n];
-        for (segment, &t_stop) in segment_ends.iter().enumerate() {
-            if segment > 0 {
-                integrator.restart(&mut system);
-            }
-            while integrator.t < t_stop {
-                integrator
-                    .step(&mut system, t_stop)
-                    .map_err(|failure| match failure {
-                        StepFailure::StepSizeUnderflow { t, h, non_finite } => {
-                            SimError::StepSizeUnderflow {
-                                t,
-                                h,
-                                non_finite: non_finite.map(|i| model.layout.names[i].clone()),
-                            }
-                        }
-                    })?;
-                let counts = integrator.counts;
-                if counts.steps + counts.rejected > settings.max_steps {
-                    return Err(SimError::TooManySteps {
-                        t: integrator.t,
-                        steps: counts.steps,
-                    });
-                }
-                while next_sample < times.len()
-                    && times[next_sample] <= integrator.t * (1.0 + 1e-14)
-                {
-                    integrator.interpolate(times[next_sample], &mut buffer);
-                    trajectory.push(times[next_sample], &buffer);
-                    next_sample += 1;
-                }
-                if counts.steps.is_multiple_of(2048) {
-                    progress(integrator.t / settings.t_end);
-                }
-            }
-        }
-        progress(1.0);
-        trajectory.stats = SolverStats {
-            engine: self.name().to_string(),
-            counts: integrator.counts,
-            wall_time_s: started.elapsed().as_secs_f64(),
-        };
-        Ok(trajectory)
+            settings,
+            progress,
+            |system| DormandPrince::new(system, 0.0, x0, tol),
+        )
+    }
+}
+
+/// The linearly implicit Rosenbrock-W engine (ROS34PW2) with the model's
+/// exact Jacobian, reused over a few steps: for stages stiffer than the
+/// explicit engine handles economically.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct RosenbrockEngine;
+
+impl Engine for RosenbrockEngine {
+    fn name(&self) -> &'static str {
+        "rosenbrock"
+    }
+
+    fn simulate(
+        &self,
+        model: &Model,
+        x0: &[f64],
+        excitation: &dyn Excitation,
+        settings: &SimSettings,
+        progress: &mut dyn FnMut(f64),
+    ) -> Result<Trajectory, SimError> {
+        let tol = tolerances(model, settings);
+        let span = settings.sample_interval.min(settings.t_end);
+        integrate(
+            self.name(),
+            model,
+            x0,
+            excitation,
+            settings,
+            progress,
+            |system| Rosenbrock::new(system, 0.0, x0, tol, span),
+        )
     }
 }
 
@@ -318,6 +430,7 @@ impl Engine for NativeEngine {
 pub fn engine_by_name(name: &str) -> Option<Box<dyn Engine>> {
     match name {
         "native" | "dopri5" => Some(Box::new(NativeEngine)),
+        "rosenbrock" | "implicit" => Some(Box::new(RosenbrockEngine)),
         "rapier" => Some(Box::new(crate::rapier_engine::RapierEngine::default())),
         _ => None,
     }
@@ -334,4 +447,4 @@ pub fn engine_for(scenario: &Scenario) -> Option<Box<dyn Engine>> {
 }
 
 /// Names accepted by [`engine_by_name`].
-pub const ENGINE_NAMES: [&str; 2] = ["native", "rapier"];
+pub const ENGINE_NAMES: [&str; 3] = ["native", "rosenbrock", "rapier"];

@@ -10,14 +10,15 @@ pub mod dopri;
 pub mod engine;
 pub mod metrics;
 pub mod rapier_engine;
+pub mod rosenbrock;
 pub mod run;
 pub mod trajectory;
 
 pub use cosim::{HeldInputs, Stepper, StepperTolerances};
 pub use dopri::{Checkpoint, StepCounts};
 pub use engine::{
-    ENGINE_NAMES, Engine, Excitation, NativeEngine, ScenarioExcitation, SimError, SimSettings,
-    engine_by_name, engine_for, sample_times,
+    ENGINE_NAMES, Engine, Excitation, NativeEngine, RosenbrockEngine, ScenarioExcitation, SimError,
+    SimSettings, engine_by_name, engine_for, sample_times,
 };
 pub use metrics::{SignalSummary, WindowStats, summarize, window_stats};
 pub use rapier_engine::RapierEngine;
