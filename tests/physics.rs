@@ -3,40 +3,9 @@
 //! reached in simulation, a two-level prismatic tree, a pendulum on a cart (the
 //! rotating, general path), and fixed-joint merging.
 
-use std::path::Path;
-
-use fistage_model::{Inputs, Model, RobotSpec, Scenario, assemble};
-use fistage_sim::{Engine, Excitation, NativeEngine, ScenarioExcitation, SimSettings};
-use fistage_tests::{SplitMix, load};
-
-fn model_from(robot_xml: &str, scenario_toml: &str) -> Model {
-    let robot =
-        RobotSpec::from_str(robot_xml, Path::new("test.urdf")).unwrap_or_else(|e| panic!("{e}"));
-    let scenario =
-        Scenario::from_str(scenario_toml, Path::new("test.toml")).unwrap_or_else(|e| panic!("{e}"));
-    assemble(robot, &scenario)
-        .unwrap_or_else(|e| panic!("{e}"))
-        .1
-}
-
-fn settings(t_end: f64, dt: f64, rtol: f64) -> SimSettings {
-    SimSettings {
-        t_end,
-        sample_interval: dt,
-        rtol,
-        atol_scale: 1.0,
-        max_step: None,
-        max_steps: 50_000_000,
-    }
-}
-
-fn still() -> ScenarioExcitation {
-    ScenarioExcitation {
-        reference: Default::default(),
-        platform_velocity: 0.0,
-        servo_force: 0.0,
-    }
-}
+use fistage_model::{Inputs, assemble};
+use fistage_sim::{Engine, Excitation, NativeEngine, ScenarioExcitation};
+use fistage_tests::{CART_PENDULUM, SplitMix, load, model_from, settings, still};
 
 /// With no servo and no platform motion, kinetic + isolator + bristle energy
 /// never increases (LuGre is dissipative while |z| <= g(v)).
@@ -186,14 +155,6 @@ fn two_level_prismatic_tree_matches_modal_solution() {
         "largest deviation from closed form {worst} m"
     );
 }
-
-const CART_PENDULUM: &str = r#"<robot name="cart_pendulum">
-  <link name="world"/>
-  <link name="cart"><inertial><mass value="3.0"/><inertia ixx="1e-2" ixy="0" ixz="0" iyy="1e-2" iyz="0" izz="1e-2"/></inertial></link>
-  <link name="rod"><inertial><origin xyz="0 0 -0.4"/><mass value="0.7"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial></link>
-  <joint name="cart_x" type="prismatic"><parent link="world"/><child link="cart"/><axis xyz="1 0 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
-  <joint name="swing" type="continuous"><origin xyz="0 0 0.05"/><parent link="cart"/><child link="rod"/><axis xyz="0 1 0"/></joint>
-</robot>"#;
 
 /// A point-mass pendulum on a free cart (revolute joint below a prismatic one:
 /// the general, rotating path). Small swings oscillate at

@@ -4,13 +4,12 @@
 //! step; the same torque-free tumbling; and the colliders only rapier has (a
 //! hard stop, a loose payload) checked against physics computed independently.
 
-use fistage_model::{Loaded, RobotSpec, Scenario, assemble};
+use fistage_model::Loaded;
 use fistage_sim::{
     Engine, NativeEngine, RapierEngine, RunOutput, ScenarioExcitation, SimSettings, run_scenario,
 };
-use fistage_tests::{load, run};
+use fistage_tests::{CART_PENDULUM, FREE_BODY, load, model_from, run, settings, still};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
-use std::path::Path;
 
 fn with_engine(loaded: &Loaded, engine: &str, dt: Option<f64>) -> RunOutput {
     let mut loaded = loaded.clone();
@@ -81,13 +80,6 @@ fn four_bearing_stage_statistics_agree() {
     assert!(yaw_mean < 5e-3, "yaw excited by the mismatch: {yaw_mean:e}");
 }
 
-const FREE_BODY: &str = r#"<robot name="free" xmlns:fistage="urn:fistage:urdf:1">
-  <link name="world"/>
-  <link name="block"><inertial><origin xyz="0.01 -0.02 0.005" rpy="0.3 -0.2 0.5"/><mass value="2.0"/>
-    <inertia ixx="0.004" ixy="0.0003" ixz="-0.0002" iyy="0.006" iyz="0.0001" izz="0.009"/></inertial></link>
-  <joint name="free" type="floating"><origin xyz="0.1 0.2 0.3" rpy="0.1 0.2 0.3"/><parent link="world"/><child link="block"/></joint>
-</robot>"#;
-
 /// World angular momentum about the centre of mass, from the state.
 fn momentum(model: &fistage_model::Model, x: &[f64]) -> Vector3<f64> {
     let body = &model.bodies[0];
@@ -100,28 +92,17 @@ fn momentum(model: &fistage_model::Model, x: &[f64]) -> Vector3<f64> {
 
 #[test]
 fn tumbling_body_conserves_momentum_and_agrees_with_native() {
-    let robot = RobotSpec::from_str(FREE_BODY, Path::new("free.urdf")).expect("robot");
-    let scenario = Scenario::from_str(
+    let model = model_from(
+        FREE_BODY,
         "robot = \"x\"\nduration = 1\ngravity = [0, 0, 0]\n",
-        Path::new("free.toml"),
-    )
-    .expect("scenario");
-    let model = assemble(robot, &scenario).expect("model").1;
+    );
     let nq = model.layout.nq;
     let mut x0 = model.zero_state();
     x0[nq..nq + 6].copy_from_slice(&[0.01, -0.02, 0.03, 3.0, -7.0, 5.0]);
-    let still = ScenarioExcitation {
-        reference: Default::default(),
-        platform_velocity: 0.0,
-        servo_force: 0.0,
-    };
+    let still = still();
     let settings = SimSettings {
-        t_end: 1.0,
-        sample_interval: 1e-2,
-        rtol: 1e-11,
         atol_scale: 1e-2,
-        max_step: None,
-        max_steps: 10_000_000,
+        ..settings(1.0, 1e-2, 1e-11)
     };
     let native = NativeEngine
         .simulate(&model, &x0, &still, &settings, &mut |_| {})
@@ -240,41 +221,19 @@ fn payload_stays_put_with_friction_and_slides_as_coulomb_predicts_without() {
     );
 }
 
-const CART_PENDULUM: &str = r#"<robot name="cart_pendulum">
-  <link name="world"/>
-  <link name="cart"><inertial><mass value="3.0"/><inertia ixx="1e-2" ixy="0" ixz="0" iyy="1e-2" iyz="0" izz="1e-2"/></inertial></link>
-  <link name="rod"><inertial><origin xyz="0 0 -0.4"/><mass value="0.7"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial></link>
-  <joint name="cart_x" type="prismatic"><parent link="world"/><child link="cart"/><axis xyz="1 0 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
-  <joint name="swing" type="continuous"><origin xyz="0 0 0.05"/><parent link="cart"/><child link="rod"/><axis xyz="0 1 0"/></joint>
-</robot>"#;
-
 /// A revolute joint below a prismatic one, with a point mass (zero inertia
 /// about its centre): rapier swings at the closed-form frequency
 /// w^2 = g (M + m) / (M L) and keeps the horizontal momentum.
 #[test]
 fn pendulum_on_a_cart_swings_at_the_closed_form_frequency() {
-    let robot = RobotSpec::from_str(CART_PENDULUM, Path::new("cart.urdf")).expect("robot");
-    let scenario = Scenario::from_str("robot = \"x\"\nduration = 1\n", Path::new("cart.toml"))
-        .expect("scenario");
-    let model = assemble(robot, &scenario).expect("model").1;
+    let model = model_from(CART_PENDULUM, "robot = \"x\"\nduration = 1\n");
     let (cart, bob, length, g): (f64, f64, f64, f64) = (3.0, 0.7, 0.4, 9.81);
     let omega = (g * (cart + bob) / (cart * length)).sqrt();
     let amplitude = 1e-3;
     let mut x0 = model.zero_state();
     x0[1] = amplitude;
-    let still = ScenarioExcitation {
-        reference: Default::default(),
-        platform_velocity: 0.0,
-        servo_force: 0.0,
-    };
-    let settings = SimSettings {
-        t_end: 2.0,
-        sample_interval: 1e-3,
-        rtol: 1e-8,
-        atol_scale: 1.0,
-        max_step: None,
-        max_steps: 50_000_000,
-    };
+    let still = still();
+    let settings = settings(2.0, 1e-3, 1e-8);
     let mut engine = RapierEngine::default();
     engine.settings.dt = Some(1e-5);
     let trajectory = engine
@@ -312,13 +271,10 @@ const CARRIER: &str = r#"<robot name="carrier">
 /// follows the native engine.
 #[test]
 fn moving_free_root_with_a_jointed_child_follows_native() {
-    let robot = RobotSpec::from_str(CARRIER, Path::new("carrier.urdf")).expect("robot");
-    let scenario = Scenario::from_str(
+    let model = model_from(
+        CARRIER,
         "robot = \"x\"\nduration = 1\ngravity = [0, 0, 0]\n",
-        Path::new("carrier.toml"),
-    )
-    .expect("scenario");
-    let model = assemble(robot, &scenario).expect("model").1;
+    );
     let nq = model.layout.nq;
     let mut x0 = model.zero_state();
     let slide = model.layout.index("slide.q").expect("slide.q");
@@ -326,18 +282,10 @@ fn moving_free_root_with_a_jointed_child_follows_native() {
     x0[slide] = 0.01;
     x0[slide_rate] = 0.05;
     x0[nq..nq + 6].copy_from_slice(&[0.1, 0.02, -0.03, 0.3, -0.2, 0.5]);
-    let still = ScenarioExcitation {
-        reference: Default::default(),
-        platform_velocity: 0.0,
-        servo_force: 0.0,
-    };
+    let still = still();
     let settings = SimSettings {
-        t_end: 0.5,
-        sample_interval: 1e-2,
-        rtol: 1e-11,
         atol_scale: 1e-2,
-        max_step: None,
-        max_steps: 10_000_000,
+        ..settings(0.5, 1e-2, 1e-11)
     };
     let native = NativeEngine
         .simulate(&model, &x0, &still, &settings, &mut |_| {})
@@ -373,14 +321,7 @@ fn off_grid_end_time_gets_its_own_sample() {
     let model = &loaded.model;
     let x0 = fistage_sim::initial_state(model, &loaded.scenario).expect("initial state");
     let excitation = ScenarioExcitation::from_scenario(&loaded.scenario);
-    let settings = SimSettings {
-        t_end: 0.01005,
-        sample_interval: 1e-3,
-        rtol: 1e-8,
-        atol_scale: 1.0,
-        max_step: None,
-        max_steps: 10_000_000,
-    };
+    let settings = settings(0.01005, 1e-3, 1e-8);
     let mut engine = RapierEngine::default();
     engine.settings.dt = Some(2e-4);
     let rapier = engine

@@ -3,12 +3,10 @@
 //! checks against closed form, the exact Jacobian against central differences,
 //! and eigenvalues shared with the 1-DOF model.
 
-use std::path::Path;
-
 use fistage_analysis::modal_analysis;
-use fistage_model::{EquilibriumKind, Inputs, Model, RobotSpec, Scenario, assemble};
+use fistage_model::{EquilibriumKind, Inputs, Model};
 use fistage_sim::{Engine, Excitation, NativeEngine, ScenarioExcitation, SimSettings};
-use fistage_tests::{SplitMix, load, run};
+use fistage_tests::{FREE_BODY, SplitMix, load, model_from, run, still};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 /// Identical bearings at the centre-of-mass height: the table's x follows the
@@ -105,30 +103,11 @@ fn symmetric_stage_contains_the_one_dof_eigenvalues() {
     }
 }
 
-const FREE_BODY: &str = r#"<robot name="free" xmlns:fistage="urn:fistage:urdf:1">
-  <link name="world"/>
-  <link name="block"><inertial><origin xyz="0.01 -0.02 0.005" rpy="0.3 -0.2 0.5"/><mass value="2.0"/>
-    <inertia ixx="0.004" ixy="0.0003" ixz="-0.0002" iyy="0.006" iyz="0.0001" izz="0.009"/></inertial></link>
-  <joint name="free" type="floating"><origin xyz="0.1 0.2 0.3" rpy="0.1 0.2 0.3"/><parent link="world"/><child link="block"/></joint>
-  <fistage:actuator name="thruster" link="block"><origin xyz="0.05 0.01 -0.02"/><axis xyz="0.3 1 0.2"/></fistage:actuator>
-</robot>"#;
-
 fn free_body() -> Model {
-    let robot = RobotSpec::from_str(FREE_BODY, Path::new("free.urdf")).expect("robot");
-    let scenario = Scenario::from_str(
+    model_from(
+        FREE_BODY,
         "robot = \"x\"\nduration = 1\ngravity = [0, 0, 0]\n",
-        Path::new("free.toml"),
     )
-    .expect("scenario");
-    assemble(robot, &scenario).expect("model").1
-}
-
-fn still() -> ScenarioExcitation {
-    ScenarioExcitation {
-        reference: Default::default(),
-        platform_velocity: 0.0,
-        servo_force: 0.0,
-    }
 }
 
 /// World angular momentum about the centre of mass and kinetic energy of the free body.

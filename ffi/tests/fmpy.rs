@@ -59,20 +59,7 @@ fn simulate_and_compare(scenario: &str, name: &str, stop: f64, outputs: &[&str],
     let n_variables = validate(&fmu);
     assert!(n_variables > outputs.len());
     let csv = folder.join("fmpy.csv");
-    support::run_python(
-        "fmpy_checks.py",
-        &[
-            "simulate",
-            fmu.to_str().unwrap_or_default(),
-            csv.to_str().unwrap_or_default(),
-            "--stop",
-            &stop.to_string(),
-            "--step",
-            "0.001",
-            "--outputs",
-            &outputs.join(","),
-        ],
-    );
+    support::fmpy_simulate(&fmu, &csv, stop, outputs);
     let (names, rows) = support::read_csv(&csv);
     let native = native_run(scenario, stop);
     for output in outputs {

@@ -71,20 +71,7 @@ fn fmu_runner_and_fmpy_agree() {
         let folder = support::scratch(&format!("rust_importer_{name}"));
         let fmu = support::fmu(scenario, &folder);
         let csv = folder.join("fmpy.csv");
-        support::run_python(
-            "fmpy_checks.py",
-            &[
-                "simulate",
-                fmu.to_str().unwrap_or_default(),
-                csv.to_str().unwrap_or_default(),
-                "--stop",
-                &stop.to_string(),
-                "--step",
-                "0.001",
-                "--outputs",
-                &outputs.join(","),
-            ],
-        );
+        support::fmpy_simulate(&fmu, &csv, stop, &outputs);
         let (names, fmpy_rows) = support::read_csv(&csv);
         let rust_rows = run_in_fmu_runner(&fmu, &outputs, stop);
         assert_eq!(fmpy_rows.len(), rust_rows.len(), "{name}: same samples");

@@ -234,41 +234,35 @@ trait Integrating {
     fn counts(&self) -> StepCounts;
 }
 
-impl Integrating for DormandPrince {
-    fn time(&self) -> f64 {
-        self.t
-    }
-    fn advance(&mut self, system: &mut ModelSystem, t_stop: f64) -> Result<(), StepFailure> {
-        self.step(system, t_stop)
-    }
-    fn restart(&mut self, system: &mut ModelSystem) {
-        DormandPrince::restart(self, system);
-    }
-    fn interpolate(&self, t: f64, out: &mut [f64]) {
-        DormandPrince::interpolate(self, t, out);
-    }
-    fn counts(&self) -> StepCounts {
-        self.counts
-    }
+/// Both integrators have the same stepping interface over different system traits.
+macro_rules! integrating {
+    ($integrator:ty) => {
+        impl Integrating for $integrator {
+            fn time(&self) -> f64 {
+                self.t
+            }
+            fn advance(
+                &mut self,
+                system: &mut ModelSystem,
+                t_stop: f64,
+            ) -> Result<(), StepFailure> {
+                self.step(system, t_stop)
+            }
+            fn restart(&mut self, system: &mut ModelSystem) {
+                <$integrator>::restart(self, system);
+            }
+            fn interpolate(&self, t: f64, out: &mut [f64]) {
+                <$integrator>::interpolate(self, t, out);
+            }
+            fn counts(&self) -> StepCounts {
+                self.counts
+            }
+        }
+    };
 }
 
-impl Integrating for Rosenbrock {
-    fn time(&self) -> f64 {
-        self.t
-    }
-    fn advance(&mut self, system: &mut ModelSystem, t_stop: f64) -> Result<(), StepFailure> {
-        self.step(system, t_stop)
-    }
-    fn restart(&mut self, system: &mut ModelSystem) {
-        Rosenbrock::restart(self, system);
-    }
-    fn interpolate(&self, t: f64, out: &mut [f64]) {
-        Rosenbrock::interpolate(self, t, out);
-    }
-    fn counts(&self) -> StepCounts {
-        self.counts
-    }
-}
+integrating!(DormandPrince);
+integrating!(Rosenbrock);
 
 impl JacobianSystem for ModelSystem<'_> {
     fn jacobian(&mut self, t: f64, x: &[f64]) -> nalgebra::DMatrix<f64> {

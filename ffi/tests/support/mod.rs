@@ -85,6 +85,24 @@ pub fn run_python(script: &str, args: &[&str]) -> String {
     String::from_utf8_lossy(&output.stdout).into_owned()
 }
 
+/// Simulates an FMU in FMPy (`simulate_fmu`, 1 ms steps) into a CSV of the outputs.
+pub fn fmpy_simulate(fmu: &Path, csv: &Path, stop: f64, outputs: &[&str]) {
+    run_python(
+        "fmpy_checks.py",
+        &[
+            "simulate",
+            fmu.to_str().unwrap_or_default(),
+            csv.to_str().unwrap_or_default(),
+            "--stop",
+            &stop.to_string(),
+            "--step",
+            "0.001",
+            "--outputs",
+            &outputs.join(","),
+        ],
+    );
+}
+
 /// The FMPy `c-code` folder with the official FMI headers.
 pub fn fmi_headers() -> PathBuf {
     let out = Command::new(python())
