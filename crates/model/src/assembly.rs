@@ -703,6 +703,7 @@ fn mass_blocks(model: &mut Model, mass: &nalgebra::DMatrix<f64>) -> Vec<MassBloc
                     dofs: Vec::new(),
                     bodies: Vec::new(),
                     constant_inverse: None,
+                    free_body: None,
                 });
                 blocks.len() - 1
             }
@@ -716,6 +717,15 @@ fn mass_blocks(model: &mut Model, mass: &nalgebra::DMatrix<f64>) -> Vec<MassBloc
     }
     for block in &mut blocks {
         block.dofs.sort_unstable();
+        if let [body] = block.bodies[..]
+            && matches!(model.bodies[body].joint.motion, JointMotion::Floating)
+            && model.bodies[body].mass > 0.0
+        {
+            block.free_body = model.bodies[body]
+                .inertia
+                .try_inverse()
+                .map(|inverse| (body, inverse));
+        }
         let rotates = block
             .bodies
             .iter()

@@ -542,6 +542,10 @@ impl Model {
             for (local, &dof) in block.dofs.iter().enumerate() {
                 rhs[local] = ws.tau[dof];
             }
+            if let Some((body, inverse_inertia)) = &block.free_body {
+                free_body_accelerations(self, *body, inverse_inertia, ws);
+                continue;
+            }
             match &block.constant_inverse {
                 Some(inverse) => {
                     for (local, &dof) in block.dofs.iter().enumerate() {
@@ -598,6 +602,36 @@ impl Model {
                 }
             }
         }
+    }
+}
+
+/// The joint accelerations of a lone floating body in closed form, in place of
+/// its 6x6 block solve. With r the centre of mass relative to the body
+/// origin, the generalized forces give the world force f and moment n about
+/// the origin; then `I_c alpha = n - r x f` and `a = f / m - alpha x r`.
+fn free_body_accelerations<S: Scalar>(
+    model: &Model,
+    index: usize,
+    inverse_inertia: &Matrix3<f64>,
+    ws: &mut Workspace<S>,
+) {
+    let body = &model.bodies[index];
+    let v0 = body.joint.v_offset;
+    let axes = |k: usize| ws.dof_axis[v0 + k];
+    // The joint axes are orthonormal: world vector = sum of axis * component.
+    let (mut force, mut moment) = (Vector3::zeros(), Vector3::zeros());
+    for k in 0..3 {
+        force += axes(k) * ws.tau[v0 + k];
+        moment += axes(3 + k) * ws.tau[v0 + 3 + k];
+    }
+    let rotation = ws.rotation[index];
+    let r = rotation * cast3::<S>(&body.com);
+    let inverse_world = rotation * cast33::<S>(inverse_inertia) * rotation.transpose();
+    let alpha = inverse_world * (moment - r.cross(&force));
+    let accel = force / S::constant(body.mass) - alpha.cross(&r);
+    for k in 0..3 {
+        ws.tau[v0 + k] = axes(k).dot(&accel);
+        ws.tau[v0 + 3 + k] = axes(3 + k).dot(&alpha);
     }
 }
 

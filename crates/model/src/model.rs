@@ -113,6 +113,9 @@ pub struct MassBlock {
     pub bodies: Vec<usize>,
     /// Row-major inverse when the block does not depend on the configuration.
     pub constant_inverse: Option<Vec<f64>>,
+    /// When the block is one floating body: its inverse inertia about the
+    /// centre of mass (body axes), for the closed-form solve.
+    pub free_body: Option<(usize, Matrix3<f64>)>,
 }
 
 /// A linear six-axis bushing (friction isolator).
