@@ -289,8 +289,19 @@ impl DormandPrince {
     fn attempt(&mut self, system: &mut dyn OdeSystem, h: f64) -> f64 {
         let (t, n) = (self.t, self.n);
         let [k1, k2, k3, k4, k5, k6, k7] = &mut self.k;
-        let x = &self.x;
-        let stage = &mut self.stage;
+        // Slices of exactly n entries: the loops below need no bounds checks.
+        let (k1, k2, k3, k4, k5, k6, k7) = (
+            &mut k1[..n],
+            &mut k2[..n],
+            &mut k3[..n],
+            &mut k4[..n],
+            &mut k5[..n],
+            &mut k6[..n],
+            &mut k7[..n],
+        );
+        let x = &self.x[..n];
+        let atol = &self.tol.atol[..n];
+        let stage = &mut self.stage[..n];
         for i in 0..n {
             stage[i] = x[i] + h * A21 * k1[i];
         }
@@ -312,7 +323,7 @@ impl DormandPrince {
                 x[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i]);
         }
         system.rhs(t + h, stage, k6);
-        let x_new = &mut self.x_new;
+        let x_new = &mut self.x_new[..n];
         for i in 0..n {
             x_new[i] =
                 x[i] + h * (A71 * k1[i] + A73 * k3[i] + A74 * k4[i] + A75 * k5[i] + A76 * k6[i]);
@@ -323,7 +334,7 @@ impl DormandPrince {
         for i in 0..n {
             let e =
                 h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]);
-            let sc = self.tol.atol[i] + self.tol.rtol * x[i].abs().max(x_new[i].abs());
+            let sc = atol[i] + self.tol.rtol * x[i].abs().max(x_new[i].abs());
             sum += (e / sc) * (e / sc);
         }
         let error = (sum / n as f64).sqrt();
