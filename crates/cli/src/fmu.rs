@@ -16,12 +16,12 @@ pub struct FmuArgs {
     pub output: PathBuf,
     /// The shared library to package (default: `libfistage_fmi.so` beside this program,
     /// as `cargo build -p fistage-fmi` places it).
-    #[arg(long)]
-    pub library: Option<PathBuf>,
+    #[arg(long = "library")]
+    pub shared_object: Option<PathBuf>,
 }
 
 fn find_library(args: &FmuArgs) -> anyhow::Result<PathBuf> {
-    if let Some(library) = &args.library {
+    if let Some(library) = &args.shared_object {
         if !library.is_file() {
             bail!("--library {}: no such file", library.display());
         }
