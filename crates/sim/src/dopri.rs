@@ -61,6 +61,21 @@ const D5: f64 = 701980252875.0 / 199316789632.0;
 const D6: f64 = -1453857185.0 / 822651844.0;
 const D7: f64 = 69997945.0 / 29380423.0;
 
+impl Tolerances {
+    /// The step to try from `t` toward `t_stop` given a suggestion: the
+    /// suggestion capped by `max_step`, or exactly the rest when that is
+    /// (nearly) all of it, with whether the step lands on `t_stop`. None when
+    /// the step has fallen below round-off level.
+    pub fn next_step(&self, t: f64, suggested: f64, t_stop: f64) -> Option<(f64, bool)> {
+        let remaining = t_stop - t;
+        let h = suggested.min(self.max_step);
+        let lands = h >= remaining * (1.0 - 1e-12);
+        let h = if lands { remaining } else { h };
+        let h_min = self.min_step_relative * t.abs().max(1.0);
+        (h >= h_min || h >= remaining).then_some((h, lands))
+    }
+}
+
 /// Why a step attempt could not proceed.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum StepFailure {
@@ -237,20 +252,13 @@ impl DormandPrince {
         const BETA: f64 = 0.04;
         const ALPHA: f64 = 0.2 - BETA * 0.75;
         loop {
-            let remaining = t_stop - self.t;
-            let mut h = self.h.min(self.tol.max_step);
-            let lands = h >= remaining * (1.0 - 1e-12);
-            if lands {
-                h = remaining;
-            }
-            let h_min = self.tol.min_step_relative * self.t.abs().max(1.0);
-            if h < h_min && h < remaining {
+            let Some((h, lands)) = self.tol.next_step(self.t, self.h, t_stop) else {
                 return Err(StepFailure::StepSizeUnderflow {
                     t: self.t,
-                    h,
+                    h: self.h.min(self.tol.max_step),
                     non_finite: self.non_finite,
                 });
-            }
+            };
             let error = self.attempt(system, h);
             if error <= 1.0 {
                 let factor = if error == 0.0 {

@@ -121,6 +121,41 @@ impl Rosenbrock {
         (sum / self.n as f64).sqrt()
     }
 
+    /// The four stages of a step of length h: the new state and the error
+    /// estimate, or None when `I - h gamma J` cannot be solved.
+    fn stages(
+        &mut self,
+        system: &mut dyn JacobianSystem,
+        h: f64,
+    ) -> Option<(DVector<f64>, DVector<f64>)> {
+        let n = self.n;
+        let lu = (DMatrix::identity(n, n) - &self.jacobian * (h * GAMMA)).lu();
+        let x = DVector::from_column_slice(&self.x);
+        let mut stage = vec![0.0; n];
+        let mut f_stage = vec![0.0; n];
+        let mut evaluate = |t: f64, y: &DVector<f64>| {
+            stage.copy_from_slice(y.as_slice());
+            system.rhs(t, &stage, &mut f_stage);
+            DVector::from_column_slice(&f_stage)
+        };
+        let j = &self.jacobian;
+        let k1 = lu.solve(&(DVector::from_column_slice(&self.f) * h))?;
+        let f2 = evaluate(self.t + C2 * h, &(&x + &k1 * A21));
+        let k2 = lu.solve(&(f2 * h + j * (&k1 * (G21 * h))))?;
+        let f3 = evaluate(self.t + C3 * h, &(&x + &k1 * A31 + &k2 * A32));
+        let k3 = lu.solve(&(f3 * h + j * ((&k1 * G31 + &k2 * G32) * h)))?;
+        let f4 = evaluate(self.t + h, &(&x + &k3));
+        let k4 = lu.solve(&(f4 * h + j * ((&k1 * G41 + &k2 * G42 + &k3 * G43) * h)))?;
+        self.counts.rhs_evaluations += 3;
+        let mut x_new = x;
+        let mut error = DVector::zeros(n);
+        for (i, k) in [k1, k2, k3, k4].iter().enumerate() {
+            x_new += k * B[i];
+            error += k * (B[i] - B_EMBEDDED[i]);
+        }
+        Some((x_new, error))
+    }
+
     /// Takes one accepted step, not beyond `t_stop`.
     pub fn step(
         &mut self,
@@ -129,66 +164,22 @@ impl Rosenbrock {
     ) -> Result<(), StepFailure> {
         let n = self.n;
         loop {
-            let remaining = t_stop - self.t;
-            let mut h = self.h.min(self.tol.max_step);
-            let lands = h >= remaining * (1.0 - 1e-12);
-            if lands {
-                h = remaining;
-            }
-            let h_min = self.tol.min_step_relative * self.t.abs().max(1.0);
-            if h < h_min && h < remaining {
+            let Some((h, lands)) = self.tol.next_step(self.t, self.h, t_stop) else {
                 return Err(StepFailure::StepSizeUnderflow {
                     t: self.t,
-                    h,
+                    h: self.h.min(self.tol.max_step),
                     non_finite: self.x.iter().position(|v| !v.is_finite()),
                 });
-            }
+            };
             if self.jacobian_age >= JACOBIAN_REUSE {
                 self.refresh_jacobian(system);
             }
-            let matrix = DMatrix::identity(n, n) - &self.jacobian * (h * GAMMA);
-            let lu = matrix.lu();
-            let x = DVector::from_column_slice(&self.x);
-            let f1 = DVector::from_column_slice(&self.f);
-            let mut stage = vec![0.0; n];
-            let mut f_stage = vec![0.0; n];
-            let mut evaluate = |system: &mut dyn JacobianSystem, t: f64, y: &DVector<f64>| {
-                stage.copy_from_slice(y.as_slice());
-                system.rhs(t, &stage, &mut f_stage);
-                DVector::from_column_slice(&f_stage)
-            };
-            let solve = |rhs: DVector<f64>| lu.solve(&rhs);
-            let Some(k1) = solve(&f1 * h) else {
-                self.h = h * 0.25;
+            let Some((x_new, error)) = self.stages(system, h) else {
+                // I - h gamma J is singular at this step: try a shorter one.
                 self.counts.rejected += 1;
-                continue;
-            };
-            let f2 = evaluate(system, self.t + C2 * h, &(&x + &k1 * A21));
-            let k2 = solve(&f2 * h + &self.jacobian * (&k1 * (G21 * h)));
-            let Some(k2) = k2 else {
                 self.h = h * 0.25;
                 continue;
             };
-            let f3 = evaluate(system, self.t + C3 * h, &(&x + &k1 * A31 + &k2 * A32));
-            let k3 = solve(&f3 * h + &self.jacobian * ((&k1 * G31 + &k2 * G32) * h));
-            let Some(k3) = k3 else {
-                self.h = h * 0.25;
-                continue;
-            };
-            let f4 = evaluate(system, self.t + h, &(&x + &k3));
-            let k4 = solve(&f4 * h + &self.jacobian * ((&k1 * G41 + &k2 * G42 + &k3 * G43) * h));
-            let Some(k4) = k4 else {
-                self.h = h * 0.25;
-                continue;
-            };
-            self.counts.rhs_evaluations += 3;
-            let ks = [&k1, &k2, &k3, &k4];
-            let mut x_new = x.clone();
-            let mut error = DVector::zeros(n);
-            for (i, k) in ks.iter().enumerate() {
-                x_new += *k * B[i];
-                error += *k * (B[i] - B_EMBEDDED[i]);
-            }
             let norm = self.error_norm(x_new.as_slice(), &error);
             if norm.is_finite() && norm <= 1.0 {
                 let mut f_new = vec![0.0; n];
