@@ -17,7 +17,7 @@
 
 use nalgebra::{DMatrix, DVector, Matrix3, Quaternion, Rotation3, Unit, UnitQuaternion, Vector3};
 
-use crate::model::{Frame, Inputs, JointMotion, Model};
+use crate::model::{Controller, Frame, Inputs, JointMotion, Model};
 use crate::reference::ReferenceSample;
 use crate::scalar::Scalar;
 
@@ -176,6 +176,7 @@ impl Model {
     /// State derivative `dx = f(x, u)`. `x` and `dx` have [`Model::n_states`] entries.
     /// Models without rotating joints take the exact constant-Jacobian path of
     /// [`crate::translational`]; [`Model::rhs_general`] is the general path.
+    #[inline]
     pub fn rhs(&self, x: &[f64], inputs: &Inputs, dx: &mut [f64], ws: &mut Workspace) {
         match &self.translational_map {
             Some(map) => map.rhs(self, x, inputs, dx, ws),
@@ -692,22 +693,51 @@ pub(crate) fn servo_force<S: Scalar>(
     elements: &mut ElementValues<S>,
 ) {
     elements.actuator_force.fill(S::zero());
-    let servo_actuator = match &model.controller {
-        Some(controller) => {
-            let error = elements.sensor_position[controller.sensor] - inputs.reference_position;
-            let error_rate =
-                elements.sensor_velocity[controller.sensor] - inputs.reference_velocity;
-            let integral = controller.integral_index.map_or(S::zero(), |i| x[i]);
-            elements.tracking_error = error;
-            elements.actuator_force[controller.actuator] = -(S::constant(controller.k) * error
-                + S::constant(controller.c) * error_rate
-                + S::constant(controller.k_i) * integral);
-            Some(controller.actuator)
-        }
-        None => (!model.actuators.is_empty()).then_some(0),
-    };
-    if let Some(a) = servo_actuator {
+    if let Some(controller) = &model.controller {
+        let integral = controller.integral_index.map_or(S::zero(), |i| x[i]);
+        let (force, error) = controller.law(
+            elements.sensor_position[controller.sensor],
+            elements.sensor_velocity[controller.sensor],
+            integral,
+            inputs,
+        );
+        elements.tracking_error = error;
+        elements.actuator_force[controller.actuator] = force;
+    }
+    if let Some(a) = model.servo_actuator() {
         elements.actuator_force[a] += inputs.servo_force;
+    }
+}
+
+impl Controller {
+    /// The PID law: the force `-(k e + c e' + k_i integral)` and the tracking
+    /// error `e` = reading - reference, from the sensor reading and rate.
+    #[inline(always)]
+    pub(crate) fn law<S: Scalar>(
+        &self,
+        position: S,
+        velocity: S,
+        integral: S,
+        inputs: &InputValues<S>,
+    ) -> (S, S) {
+        let error = position - inputs.reference_position;
+        let error_rate = velocity - inputs.reference_velocity;
+        let force = -(S::constant(self.k) * error
+            + S::constant(self.c) * error_rate
+            + S::constant(self.k_i) * integral);
+        (force, error)
+    }
+}
+
+impl Model {
+    /// The actuator that receives the external `servo_force` input: the
+    /// controller's, or the first actuator when there is no controller.
+    #[inline]
+    pub(crate) fn servo_actuator(&self) -> Option<usize> {
+        match &self.controller {
+            Some(controller) => Some(controller.actuator),
+            None => (!self.actuators.is_empty()).then_some(0),
+        }
     }
 }
 

@@ -151,13 +151,18 @@ impl LugreParams {
 
     /// [`Self::force_and_z_rate`] for any [`Scalar`] (dual numbers differentiate it).
     #[inline]
+    ///
+    /// The operations are ordered for a short dependency chain (an
+    /// integrator's stages wait on each other): the exponential starts
+    /// without a division, and everything that does not need the Stribeck
+    /// level is ready before it.
     pub fn force_and_z_rate_of<S: Scalar>(&self, v: S, z: S) -> (S, S) {
-        let r = v / S::constant(self.v_s);
+        let r = v * S::constant(1.0 / self.v_s);
         let level = S::constant(self.f_c) + S::constant(self.f_s - self.f_c) * (-(r * r)).exp();
-        let z_dot = v - kink_abs(v) * S::constant(self.sigma0) / level * z;
+        let z_dot = v - kink_abs(v) * S::constant(self.sigma0) * z / level;
         let force = S::constant(self.sigma0) * z
-            + S::constant(self.sigma1) * z_dot
-            + S::constant(self.sigma2) * v;
+            + S::constant(self.sigma2) * v
+            + S::constant(self.sigma1) * z_dot;
         (force, z_dot)
     }
 

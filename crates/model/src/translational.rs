@@ -7,7 +7,7 @@
 //! are the same functions both paths call. A test checks that both paths give
 //! the same state derivative.
 
-use crate::dynamics::{Workspace, bushing_force, servo_force};
+use crate::dynamics::{Workspace, bushing_force};
 use crate::model::{Inputs, Model};
 
 /// Constant Jacobian rows of a translational model (row-major, `nv` per row).
@@ -17,6 +17,9 @@ pub(crate) struct TranslationalMap {
     mass_inverse: Vec<f64>,
     gravity: Vec<f64>,
     friction_rows: Vec<f64>,
+    /// `M^-1 J_k^T` for each friction row `J_k` (row-major, `nv` per contact):
+    /// the accelerations a unit friction force causes.
+    friction_accelerations: Vec<f64>,
     /// Translational bushing axes with stiffness or damping: (stiffness, damping,
     /// deflection offset, row start in `isolator_rows`).
     isolator_axes: Vec<(f64, f64, f64, usize)>,
@@ -48,6 +51,7 @@ impl TranslationalMap {
                 .collect(),
             gravity: vec![0.0; nv],
             friction_rows: vec![0.0; nf * nv],
+            friction_accelerations: vec![0.0; nf * nv],
             isolator_axes: Vec::new(),
             isolator_rows: vec![0.0; 3 * ni * nv],
             sensor_rows: vec![0.0; ns * nv],
@@ -93,11 +97,21 @@ impl TranslationalMap {
                 .map(|(b, body)| body.mass * ws.point_velocity(b, &body.com).dot(&model.gravity))
                 .sum();
         }
+        for k in 0..nf {
+            for i in 0..nv {
+                map.friction_accelerations[k * nv + i] = dot(
+                    &map.mass_inverse[i * nv..(i + 1) * nv],
+                    &map.friction_rows[k * nv..(k + 1) * nv],
+                );
+            }
+        }
         map
     }
 
     /// The state derivative; `ws` only supplies scratch space for the
-    /// generalized forces and the element values.
+    /// generalized forces. Models with up to four
+    /// degrees of freedom take a path whose row length is a compile-time
+    /// constant (fully unrolled products); the arithmetic is the same.
     pub(crate) fn rhs(
         &self,
         model: &Model,
@@ -106,43 +120,89 @@ impl TranslationalMap {
         dx: &mut [f64],
         ws: &mut Workspace,
     ) {
-        let nv = self.nv;
+        match self.nv {
+            1 => self.rhs_sized::<1>(model, x, inputs, dx, ws),
+            2 => self.rhs_sized::<2>(model, x, inputs, dx, ws),
+            3 => self.rhs_sized::<3>(model, x, inputs, dx, ws),
+            4 => self.rhs_sized::<4>(model, x, inputs, dx, ws),
+            _ => self.rhs_sized::<DYNAMIC>(model, x, inputs, dx, ws),
+        }
+    }
+
+    /// [`Self::rhs`] with rows of `N` entries (`N` = [`DYNAMIC`]: `nv`).
+    #[inline(always)]
+    fn rhs_sized<const N: usize>(
+        &self,
+        model: &Model,
+        x: &[f64],
+        inputs: &Inputs,
+        dx: &mut [f64],
+        ws: &mut Workspace,
+    ) {
+        let nv = row_length::<N>(self.nv);
         let nq = model.layout.nq;
         let (q, v) = (&x[..nq], &x[nq..nq + nv]);
+        let (q, v) = (&q[..nv], &v[..nv]);
         dx[..nq].copy_from_slice(v);
-        let force = &mut ws.generalized;
-        force.copy_from_slice(&self.gravity);
-        for (k, friction) in model.frictions.iter().enumerate() {
-            let row = &self.friction_rows[k * nv..(k + 1) * nv];
-            let slip = dot(row, v) - inputs.platform_velocity;
-            let (f, z_rate) = friction.lugre.force_and_z_rate(slip, x[friction.z_index]);
-            axpy(-f, row, force);
-            dx[friction.z_index] = z_rate;
-        }
+        let force = &mut ws.generalized[..nv];
+        force.copy_from_slice(&self.gravity[..nv]);
         for &(stiffness, damping, offset, start) in &self.isolator_axes {
             let row = &self.isolator_rows[start..start + nv];
             let f = bushing_force(stiffness, damping, offset + dot(row, q), dot(row, v));
             axpy(f, row, force);
         }
-        let elements = &mut ws.elements;
-        elements.reference = inputs.reference;
-        for k in 0..model.sensors.len() {
-            let row = &self.sensor_rows[k * nv..(k + 1) * nv];
-            elements.sensor_position[k] = self.sensor_offsets[k] + dot(row, q);
-            elements.sensor_velocity[k] = dot(row, v);
+        let command = match &model.controller {
+            Some(controller) => {
+                let sensor = row::<N>(&self.sensor_rows, nv, controller.sensor);
+                let integral = controller.integral_index.map_or(0.0, |i| x[i]);
+                let (f, error) = controller.law(
+                    self.sensor_offsets[controller.sensor] + dot(sensor, q),
+                    dot(sensor, v),
+                    integral,
+                    &inputs.values(),
+                );
+                if let Some(index) = controller.integral_index {
+                    dx[index] = error;
+                }
+                f
+            }
+            None => 0.0,
+        };
+        if let Some(a) = model.servo_actuator() {
+            let actuator = row::<N>(&self.actuator_rows, nv, a);
+            axpy(command + inputs.servo_force, actuator, force);
         }
-        servo_force(model, x, &inputs.values(), elements);
-        for k in 0..model.actuators.len() {
-            let row = &self.actuator_rows[k * nv..(k + 1) * nv];
-            axpy(elements.actuator_force[k], row, force);
+        for i in 0..nv {
+            dx[nq + i] = dot(row::<N>(&self.mass_inverse, nv, i), force);
         }
-        for row in 0..nv {
-            dx[nq + row] = dot(&self.mass_inverse[row * nv..(row + 1) * nv], force);
-        }
-        if let Some(index) = model.controller.as_ref().and_then(|c| c.integral_index) {
-            dx[index] = elements.tracking_error;
+        // Friction last, straight into the accelerations through the
+        // precomputed columns of M^-1 J^T: it waits on an exponential, so
+        // everything else is summed by the time it is ready.
+        for (k, friction) in model.frictions.iter().enumerate() {
+            let slip = dot(row::<N>(&self.friction_rows, nv, k), v) - inputs.platform_velocity;
+            let (f, z_rate) = friction.lugre.force_and_z_rate(slip, x[friction.z_index]);
+            let column = row::<N>(&self.friction_accelerations, nv, k);
+            axpy(-f, column, &mut dx[nq..nq + nv]);
+            dx[friction.z_index] = z_rate;
         }
     }
+}
+
+/// Row length marker for "known only at run time".
+const DYNAMIC: usize = 0;
+
+/// The row length: `N`, or `nv` when `N` is [`DYNAMIC`]. With a constant
+/// `N` every slice below has a length the compiler knows.
+#[inline(always)]
+fn row_length<const N: usize>(nv: usize) -> usize {
+    if N == DYNAMIC { nv } else { N }
+}
+
+/// Row `k` of a row-major table with rows of `nv` (= `N` unless dynamic) entries.
+#[inline(always)]
+fn row<const N: usize>(table: &[f64], nv: usize, k: usize) -> &[f64] {
+    let nv = row_length::<N>(nv);
+    &table[k * nv..(k + 1) * nv]
 }
 
 /// `a . b` over `a`'s length, summed in order (index loops over pre-sliced
@@ -151,7 +211,9 @@ impl TranslationalMap {
 #[inline(always)]
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     let b = &b[..a.len()];
-    let mut sum = 0.0;
+    // -0.0 is the exact additive identity (+0.0 is not, for -0.0), so the
+    // compiler drops the first addition.
+    let mut sum = -0.0;
     for i in 0..a.len() {
         sum += a[i] * b[i];
     }

@@ -114,8 +114,18 @@ pub struct Checkpoint {
     pub counts: StepCounts,
 }
 
-/// The integrator's state between steps, including the dense-output polynomial
-/// of the last accepted step.
+/// State-count marker for "known only at run time".
+const DYNAMIC: usize = 0;
+
+/// The number of states: `N`, or `n` when `N` is [`DYNAMIC`]. With a
+/// constant `N` every slice has a length the compiler knows.
+#[inline(always)]
+fn state_count<const N: usize>(n: usize) -> usize {
+    if N == DYNAMIC { n } else { N }
+}
+
+/// The integrator's state between steps, including the stages of the last
+/// accepted step (its dense output).
 pub struct DormandPrince {
     tol: Tolerances,
     n: usize,
@@ -128,7 +138,9 @@ pub struct DormandPrince {
     k: [Vec<f64>; 7],
     x_new: Vec<f64>,
     stage: Vec<f64>,
-    dense: [Vec<f64>; 5],
+    /// Where the last stage of the last accepted step is kept (0, or 1 after
+    /// a restart put the new first stage in slot 0).
+    last_stage_slot: usize,
     t_previous: f64,
     h_previous: f64,
     log_error_previous: f64,
@@ -166,7 +178,7 @@ impl DormandPrince {
             ],
             x_new: zeros(),
             stage: zeros(),
-            dense: [zeros(), zeros(), zeros(), zeros(), zeros()],
+            last_stage_slot: 0,
             t_previous: t0,
             h_previous: 0.0,
             log_error_previous: 1e-4f64.ln(),
@@ -200,7 +212,12 @@ impl DormandPrince {
     /// Restarts at the current point (after a discontinuity in the inputs):
     /// re-evaluates f and keeps the current step suggestion.
     pub fn restart(&mut self, system: &mut dyn OdeSystem) {
-        system.rhs(self.t, &self.x, &mut self.k[0]);
+        // Slot 1 (the second stage) is free between steps: the new first
+        // stage goes there and the last step's last stage, which the dense
+        // output still needs, moves out of slot 0.
+        system.rhs(self.t, &self.x, &mut self.k[1]);
+        self.k.swap(0, 1);
+        self.last_stage_slot = 1;
         self.counts.rhs_evaluations += 1;
         self.log_error_previous = 1e-4f64.ln();
     }
@@ -247,7 +264,11 @@ impl DormandPrince {
 
     /// Takes one accepted step, not beyond `t_stop`. Rejected attempts are retried
     /// with a smaller step. A non-finite error estimate counts as a rejection.
-    pub fn step(&mut self, system: &mut dyn OdeSystem, t_stop: f64) -> Result<(), StepFailure> {
+    pub fn step<S: OdeSystem + ?Sized>(
+        &mut self,
+        system: &mut S,
+        t_stop: f64,
+    ) -> Result<(), StepFailure> {
         const SAFETY: f64 = 0.9;
         const BETA: f64 = 0.04;
         const ALPHA: f64 = 0.2 - BETA * 0.75;
@@ -259,17 +280,20 @@ impl DormandPrince {
                     non_finite: self.non_finite,
                 });
             };
-            let error = self.attempt(system, h);
-            if error <= 1.0 {
-                let factor = if error == 0.0 {
+            // The controller works with ln(error) = ln(mean square) / 2: no
+            // square root on the way from one step to the next.
+            let mean_square = self.attempt(system, h);
+            if mean_square <= 1.0 {
+                // ln 0 = -inf is floored below.
+                let log_error = 0.5 * mean_square.ln();
+                let factor = if mean_square == 0.0 {
                     10.0
                 } else {
-                    let log_error = error.ln();
                     let factor =
                         SAFETY * (BETA * self.log_error_previous - ALPHA * log_error).exp();
                     factor.clamp(0.2, 10.0)
                 };
-                self.log_error_previous = error.max(1e-4).ln();
+                self.log_error_previous = log_error.max(1e-4f64.ln());
                 self.accept(h);
                 if lands {
                     // Land on the stop time exactly, not on t + (t_stop - t).
@@ -284,8 +308,8 @@ impl DormandPrince {
                 return Ok(());
             }
             self.counts.rejected += 1;
-            let factor = if error.is_finite() {
-                (SAFETY * error.powf(-ALPHA)).clamp(0.2, 1.0)
+            let factor = if mean_square.is_finite() {
+                (SAFETY * (-0.5 * ALPHA * mean_square.ln()).exp()).clamp(0.2, 1.0)
             } else {
                 0.1
             };
@@ -293,9 +317,32 @@ impl DormandPrince {
         }
     }
 
-    /// One trial step of size h; returns the scaled error norm.
-    fn attempt(&mut self, system: &mut dyn OdeSystem, h: f64) -> f64 {
-        let (t, n) = (self.t, self.n);
+    /// One trial step of size h; returns the mean square of the scaled
+    /// error estimate (the square of the error norm). Small systems
+    /// take a copy of the arithmetic whose length is a compile-time constant
+    /// (fully unrolled, no loop overhead); the operations are the same.
+    fn attempt<S: OdeSystem + ?Sized>(&mut self, system: &mut S, h: f64) -> f64 {
+        match self.n {
+            1 => self.attempt_sized::<1, S>(system, h),
+            2 => self.attempt_sized::<2, S>(system, h),
+            3 => self.attempt_sized::<3, S>(system, h),
+            4 => self.attempt_sized::<4, S>(system, h),
+            5 => self.attempt_sized::<5, S>(system, h),
+            6 => self.attempt_sized::<6, S>(system, h),
+            7 => self.attempt_sized::<7, S>(system, h),
+            8 => self.attempt_sized::<8, S>(system, h),
+            _ => self.attempt_sized::<DYNAMIC, S>(system, h),
+        }
+    }
+
+    /// [`Self::attempt`] over `N` states (`N` = [`DYNAMIC`]: `self.n`).
+    #[inline(always)]
+    fn attempt_sized<const N: usize, S: OdeSystem + ?Sized>(
+        &mut self,
+        system: &mut S,
+        h: f64,
+    ) -> f64 {
+        let (t, n) = (self.t, state_count::<N>(self.n));
         let [k1, k2, k3, k4, k5, k6, k7] = &mut self.k;
         // Slices of exactly n entries: the loops below need no bounds checks.
         let (k1, k2, k3, k4, k5, k6, k7) = (
@@ -315,80 +362,87 @@ impl DormandPrince {
         }
         system.rhs(t + C2 * h, stage, k2);
         for i in 0..n {
-            stage[i] = x[i] + h * (A31 * k1[i] + A32 * k2[i]);
+            stage[i] = x[i] + h * (A31 * k1[i]) + (h * A32) * k2[i];
         }
         system.rhs(t + C3 * h, stage, k3);
         for i in 0..n {
-            stage[i] = x[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i]);
+            stage[i] = x[i] + h * (A41 * k1[i] + A42 * k2[i]) + (h * A43) * k3[i];
         }
         system.rhs(t + C4 * h, stage, k4);
         for i in 0..n {
-            stage[i] = x[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i]);
+            stage[i] = x[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i]) + (h * A54) * k4[i];
         }
         system.rhs(t + C5 * h, stage, k5);
         for i in 0..n {
-            stage[i] =
-                x[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i]);
+            stage[i] = x[i]
+                + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i])
+                + (h * A65) * k5[i];
         }
         system.rhs(t + h, stage, k6);
         let x_new = &mut self.x_new[..n];
         for i in 0..n {
-            x_new[i] =
-                x[i] + h * (A71 * k1[i] + A73 * k3[i] + A74 * k4[i] + A75 * k5[i] + A76 * k6[i]);
+            x_new[i] = x[i]
+                + h * (A71 * k1[i] + A73 * k3[i] + A74 * k4[i] + A75 * k5[i])
+                + (h * A76) * k6[i];
         }
         system.rhs(t + h, x_new, k7);
         self.counts.rhs_evaluations += 6;
-        let mut sum = 0.0;
+        // -0.0: the exact additive identity, so the first addition folds away.
+        let mut sum = -0.0;
         for i in 0..n {
-            let e =
-                h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]);
+            let e = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i])
+                + (h * E7) * k7[i];
             let sc = atol[i] + self.tol.rtol * x[i].abs().max(x_new[i].abs());
             sum += (e / sc) * (e / sc);
         }
-        let error = (sum / n as f64).sqrt();
-        if error.is_finite() {
+        let mean_square = sum / n as f64;
+        if mean_square.is_finite() {
             self.non_finite = None;
-            error
+            mean_square
         } else {
             self.non_finite = (0..n).find(|&i| !x_new[i].is_finite() || !k7[i].is_finite());
             f64::INFINITY
         }
     }
 
-    /// Stores the dense-output polynomial and advances to the new point.
+    /// Advances to the new point. The dense output of the step is not
+    /// formed here but on demand in [`Self::interpolate`], from the stages
+    /// that stay in place until the next attempt: most steps hold no sample.
     fn accept(&mut self, h: f64) {
-        let [k1, _, k3, k4, k5, k6, k7] = &self.k;
-        let [r1, r2, r3, r4, r5] = &mut self.dense;
-        for i in 0..self.n {
-            let dy = self.x_new[i] - self.x[i];
-            let bspl = h * k1[i] - dy;
-            r1[i] = self.x[i];
-            r2[i] = dy;
-            r3[i] = bspl;
-            r4[i] = dy - h * k7[i] - bspl;
-            r5[i] =
-                h * (D1 * k1[i] + D3 * k3[i] + D4 * k4[i] + D5 * k5[i] + D6 * k6[i] + D7 * k7[i]);
-        }
         self.t_previous = self.t;
         self.h_previous = h;
         self.t += h;
+        // The old state stays in `x_new` for the dense output.
         std::mem::swap(&mut self.x, &mut self.x_new);
-        // FSAL: the last stage is the first of the next step.
+        // FSAL: the last stage is the first of the next step; the old first
+        // stage moves to the last slot, where the dense output reads it.
         self.k.swap(0, 6);
+        self.last_stage_slot = 0;
         self.counts.steps += 1;
     }
 
-    /// State at time `t` inside the last accepted step, written into `out`.
+    /// State at time `t` inside the last accepted step, written into `out`:
+    /// Hairer's fourth-order continuous extension.
     pub fn interpolate(&self, t: f64, out: &mut [f64]) {
-        let theta = if self.h_previous > 0.0 {
-            ((t - self.t_previous) / self.h_previous).clamp(0.0, 1.0)
+        let h = self.h_previous;
+        let theta = if h > 0.0 {
+            ((t - self.t_previous) / h).clamp(0.0, 1.0)
         } else {
             1.0
         };
         let theta1 = 1.0 - theta;
-        let [r1, r2, r3, r4, r5] = &self.dense;
-        for i in 0..self.n {
-            out[i] = r1[i] + theta * (r2[i] + theta1 * (r3[i] + theta * (r4[i] + theta1 * r5[i])));
+        let n = self.n;
+        let (x_old, x) = (&self.x_new[..n], &self.x[..n]);
+        let k1 = &self.k[6][..n];
+        let [k3, k4, k5, k6] = [&self.k[2], &self.k[3], &self.k[4], &self.k[5]];
+        let k7 = &self.k[self.last_stage_slot][..n];
+        for i in 0..n {
+            let dy = x[i] - x_old[i];
+            let bspl = h * k1[i] - dy;
+            let r4 = dy - h * k7[i] - bspl;
+            let r5 =
+                h * (D1 * k1[i] + D3 * k3[i] + D4 * k4[i] + D5 * k5[i] + D6 * k6[i] + D7 * k7[i]);
+            out[i] = x_old[i] + theta * (dy + theta1 * (bspl + theta * (r4 + theta1 * r5)));
         }
     }
 
@@ -436,6 +490,36 @@ mod tests {
             worst_dense = worst_dense.max((out[0] - (w * mid).cos()).abs());
         }
         ((dp.x[0] - (w * 3.0).cos()).abs(), worst_dense, dp.counts)
+    }
+
+    #[test]
+    fn dense_output_survives_a_restart() {
+        // The dense output is formed on demand from the stages of the last
+        // step; a restart must not disturb the stage it reads.
+        let mut system = Oscillator {
+            w: 2.0 * std::f64::consts::PI,
+        };
+        let tol = Tolerances {
+            rtol: 1e-8,
+            atol: vec![1e-8; 2],
+            max_step: f64::INFINITY,
+            min_step_relative: 1e-14,
+        };
+        let mut dp = DormandPrince::new(&mut system, 0.0, &[1.0, 0.0], tol);
+        for _ in 0..5 {
+            dp.step(&mut system, 3.0).unwrap();
+        }
+        let mid = 0.3 * dp.previous_time() + 0.7 * dp.t;
+        let (mut before, mut after) = ([0.0; 2], [0.0; 2]);
+        dp.interpolate(mid, &mut before);
+        system.w *= 2.0;
+        dp.restart(&mut system);
+        dp.interpolate(mid, &mut after);
+        assert_eq!(before, after);
+        assert!((before[0] - (2.0 * std::f64::consts::PI * mid).cos()).abs() < 1e-7);
+        // The step after the restart uses the new right-hand side.
+        let k1 = dp.k[0].clone();
+        assert_eq!(k1[1], -system.w * system.w * dp.x[0]);
     }
 
     #[test]

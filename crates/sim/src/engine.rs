@@ -20,6 +20,11 @@ pub trait Excitation: Sync {
     fn breakpoints(&self) -> Vec<f64> {
         Vec::new()
     }
+    /// True when the inputs do not depend on time (the engine then reads
+    /// them once).
+    fn is_constant(&self) -> bool {
+        false
+    }
 }
 
 /// Inputs given by a scenario: its reference, its platform velocity, no external force.
@@ -55,6 +60,10 @@ impl Excitation for ScenarioExcitation {
 
     fn breakpoints(&self) -> Vec<f64> {
         self.reference.breakpoints()
+    }
+
+    fn is_constant(&self) -> bool {
+        matches!(self.reference, Reference::Constant { .. })
     }
 }
 
@@ -160,7 +169,28 @@ pub struct NativeEngine;
 struct ModelSystem<'a> {
     model: &'a Model,
     excitation: &'a dyn Excitation,
+    /// The inputs, when they do not depend on time.
+    constant_inputs: Option<Inputs>,
     workspace: Workspace,
+}
+
+impl<'a> ModelSystem<'a> {
+    fn new(model: &'a Model, excitation: &'a dyn Excitation) -> Self {
+        Self {
+            model,
+            excitation,
+            constant_inputs: excitation.is_constant().then(|| excitation.inputs(0.0)),
+            workspace: model.workspace(),
+        }
+    }
+
+    #[inline]
+    fn inputs(&self, t: f64) -> Inputs {
+        match &self.constant_inputs {
+            Some(inputs) => *inputs,
+            None => self.excitation.inputs(t),
+        }
+    }
 }
 
 impl OdeSystem for ModelSystem<'_> {
@@ -168,8 +198,9 @@ impl OdeSystem for ModelSystem<'_> {
         self.model.n_states()
     }
 
+    #[inline]
     fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
-        let inputs = self.excitation.inputs(t);
+        let inputs = self.inputs(t);
         self.model.rhs(x, &inputs, dx, &mut self.workspace);
     }
 }
@@ -266,7 +297,7 @@ integrating!(Rosenbrock);
 
 impl JacobianSystem for ModelSystem<'_> {
     fn jacobian(&mut self, t: f64, x: &[f64]) -> nalgebra::DMatrix<f64> {
-        self.model.jacobian(x, &self.excitation.inputs(t))
+        self.model.jacobian(x, &self.inputs(t))
     }
 }
 
@@ -298,11 +329,7 @@ fn integrate<I: Integrating>(
     check_settings(model, x0, settings)?;
     let started = Instant::now();
     let n = model.n_states();
-    let mut system = ModelSystem {
-        model,
-        excitation,
-        workspace: model.workspace(),
-    };
+    let mut system = ModelSystem::new(model, excitation);
     let times = sample_times(settings.t_end, settings.sample_interval);
     let mut trajectory = Trajectory::with_capacity(n, times.len());
     trajectory.push(0.0, x0);
