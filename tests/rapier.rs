@@ -61,8 +61,12 @@ fn fig05b_statistics_agree_and_converge_with_the_step() {
 fn four_bearing_stage_statistics_agree() {
     let mut symmetric = load("scenarios/coupling/symmetric_fig05b.toml");
     symmetric.scenario.solver.rtol = 1e-10;
-    symmetric.scenario.duration = 3.0;
-    symmetric.scenario.window = [1.5, 3.0];
+    // Two seconds: slipping, the four bearings' antisymmetric modes are
+    // unstable (`fistage modes`: Re +31.6 1/s), so any round-off difference
+    // between the bearings grows into yaw; after about 2.5 s the two
+    // engines' limit cycles differ in phase by round-off, not by physics.
+    symmetric.scenario.duration = 2.0;
+    symmetric.scenario.window = [1.0, 2.0];
     let native = run(&symmetric);
     let rapier = with_engine(&symmetric, "rapier", Some(1e-5));
     let (p2p, mean) = differences(&rapier, &native, "encoder.position");

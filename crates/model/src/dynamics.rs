@@ -58,6 +58,9 @@ pub struct Workspace<S: Scalar = f64> {
     dof_axis: Vec<Vector3<S>>,
     dof_center: Vec<Vector3<S>>,
     dof_angular: Vec<bool>,
+    /// Per body: it never turns and its axes stay those of the world, so
+    /// its rotation is the identity and its angular velocity zero.
+    parallel: Vec<bool>,
     force: Vec<Vector3<S>>,
     moment: Vec<Vector3<S>>,
     jacobian: Vec<(Vector3<S>, Vector3<S>)>,
@@ -132,6 +135,7 @@ impl Model {
             self.sensors.len(),
         );
         Workspace {
+            parallel: self.parallel_bodies(),
             rotation: vec![Matrix3::identity(); nb],
             origin: zeros(),
             omega: zeros(),
@@ -171,6 +175,20 @@ impl Model {
                 tracking_error: S::zero(),
             },
         }
+    }
+
+    /// Which bodies never turn and keep the world's axes: no joint between
+    /// them and the world rotates and every joint frame on the way is
+    /// unrotated.
+    fn parallel_bodies(&self) -> Vec<bool> {
+        let mut parallel: Vec<bool> = Vec::with_capacity(self.bodies.len());
+        for body in &self.bodies {
+            let parent_parallel = body.parent.is_none_or(|p| parallel[p]);
+            parallel.push(
+                parent_parallel && !body.turns && body.joint.origin_rotation == Matrix3::identity(),
+            );
+        }
+        parallel
     }
 
     /// State derivative `dx = f(x, u)`. `x` and `dx` have [`Model::n_states`] entries.
@@ -375,10 +393,18 @@ impl Model {
                     (joint_rotation * attitude.matrix(), origin)
                 }
             };
-            let r = origin - parent_origin;
-            let two = S::constant(2.0);
             ws.rotation[i] = rotation;
             ws.origin[i] = origin;
+            if body.parent.is_none() {
+                // The world neither moves nor turns: no transport terms.
+                ws.omega[i] = angular_rate;
+                ws.velocity[i] = linear_rate;
+                ws.bias_alpha[i] = zero;
+                ws.bias_accel[i] = zero;
+                continue;
+            }
+            let r = origin - parent_origin;
+            let two = S::constant(2.0);
             ws.omega[i] = parent_omega + angular_rate;
             ws.velocity[i] = parent_velocity + parent_omega.cross(&r) + linear_rate;
             ws.bias_alpha[i] = parent_alpha + parent_omega.cross(&angular_rate);
@@ -391,12 +417,14 @@ impl Model {
 
     fn isolator_forces<S: Scalar>(&self, ws: &mut Workspace<S>) {
         for (k, isolator) in self.isolators.iter().enumerate() {
+            // Attach-frame rotations; None is the identity (skipped products).
             let attach = |frame: Frame, side: usize, ws: &Workspace<S>| {
-                let rotation = frame_rotation(frame, ws);
-                if isolator.attach_is_identity[side] {
-                    rotation
-                } else {
-                    rotation * cast33::<S>(&isolator.attach_rotations[side])
+                let attach = (!isolator.attach_is_identity[side])
+                    .then(|| cast33::<S>(&isolator.attach_rotations[side]));
+                match (frame_rotation(frame, ws), attach) {
+                    (Some(rotation), Some(attach)) => Some(rotation * attach),
+                    (rotation, None) => rotation,
+                    (None, attach) => attach,
                 }
             };
             let parent_rotation = attach(isolator.parent, 0, ws);
@@ -414,14 +442,21 @@ impl Model {
             // Velocity of the parent's material point that coincides with the child attach point.
             let parent_velocity_there = match isolator.parent {
                 Frame::World => Vector3::zeros(),
+                Frame::Body(b) if ws.parallel[b] => ws.velocity[b],
                 Frame::Body(b) => ws.velocity[b] + ws.omega[b].cross(&(child_point - ws.origin[b])),
             };
-            let to_local = parent_rotation.transpose();
-            let translation = to_local * (child_point - parent_point);
-            let translation_rate = to_local * (child_point_velocity - parent_velocity_there);
-            let rotation = rotation_log(&(to_local * child_rotation));
-            let rotation_rate =
-                to_local * (frame_omega(isolator.child, ws) - frame_omega(isolator.parent, ws));
+            let to_local = parent_rotation.map(|r| r.transpose());
+            let translation = rotate(&to_local, child_point - parent_point);
+            let translation_rate = rotate(&to_local, child_point_velocity - parent_velocity_there);
+            let rotation = match (&to_local, &child_rotation) {
+                (Some(to_local), Some(child)) => rotation_log(&(to_local * child)),
+                (Some(relative), None) | (None, Some(relative)) => rotation_log(relative),
+                (None, None) => Vector3::zeros(),
+            };
+            let rotation_rate = rotate(
+                &to_local,
+                frame_omega(isolator.child, ws) - frame_omega(isolator.parent, ws),
+            );
             let (k_, c_) = (&isolator.stiffness, &isolator.damping);
             let law = |axis: usize, d: S, rate: S| {
                 -(S::constant(k_[axis]) * d + S::constant(c_[axis]) * rate)
@@ -436,8 +471,8 @@ impl Model {
                 law(4, rotation.y, rotation_rate.y),
                 law(5, rotation.z, rotation_rate.z),
             );
-            let force = parent_rotation * local_force;
-            let torque = parent_rotation * local_torque;
+            let force = rotate(&parent_rotation, local_force);
+            let torque = rotate(&parent_rotation, local_torque);
             apply_wrench(ws, isolator.child, &child_point, &force, &torque);
             apply_wrench(ws, isolator.parent, &child_point, &-force, &-torque);
             ws.elements.isolator_deflection[k] = [
@@ -507,16 +542,25 @@ impl Model {
             let body = &self.bodies[i];
             let r = ws.rotation[i] * cast3::<S>(&body.com);
             let com = ws.origin[i] + r;
-            let omega = ws.omega[i];
-            let alpha = ws.bias_alpha[i];
-            let accel_com = ws.bias_accel[i] + alpha.cross(&r) + omega.cross(&omega.cross(&r));
-            let inertial_force = (accel_com - gravity) * S::constant(body.mass);
-            let mut inertial_moment = com.cross(&inertial_force);
-            if body.turns {
-                let inertia =
-                    ws.rotation[i] * cast33::<S>(&body.inertia) * ws.rotation[i].transpose();
-                inertial_moment += inertia * alpha + omega.cross(&(inertia * omega));
-            }
+            let (inertial_force, inertial_moment) = if body.turns {
+                let omega = ws.omega[i];
+                let alpha = ws.bias_alpha[i];
+                let accel_com = ws.bias_accel[i] + alpha.cross(&r) + omega.cross(&omega.cross(&r));
+                let inertial_force = (accel_com - gravity) * S::constant(body.mass);
+                // I_world alpha + omega x I_world omega, evaluated in body
+                // axes (three rotations instead of forming R I R^T).
+                let rotation = &ws.rotation[i];
+                let inertia = cast33::<S>(&body.inertia);
+                let (omega_body, alpha_body) = (rotation.tr_mul(&omega), rotation.tr_mul(&alpha));
+                let spin = omega_body.cross(&(inertia * omega_body));
+                let inertial_moment =
+                    com.cross(&inertial_force) + rotation * (inertia * alpha_body + spin);
+                (inertial_force, inertial_moment)
+            } else {
+                // No angular velocity or acceleration: translation only.
+                let inertial_force = (ws.bias_accel[i] - gravity) * S::constant(body.mass);
+                (inertial_force, com.cross(&inertial_force))
+            };
             ws.force[i] = inertial_force - ws.force[i];
             ws.moment[i] = inertial_moment - ws.moment[i];
         }
@@ -627,8 +671,9 @@ fn free_body_accelerations<S: Scalar>(
     }
     let rotation = ws.rotation[index];
     let r = rotation * cast3::<S>(&body.com);
-    let inverse_world = rotation * cast33::<S>(inverse_inertia) * rotation.transpose();
-    let alpha = inverse_world * (moment - r.cross(&force));
+    // R I^-1 R^T applied as three products, without forming it.
+    let alpha =
+        rotation * (cast33::<S>(inverse_inertia) * rotation.tr_mul(&(moment - r.cross(&force))));
     let accel = force / S::constant(body.mass) - alpha.cross(&r);
     for k in 0..3 {
         ws.tau[v0 + k] = axes(k).dot(&accel);
@@ -645,6 +690,7 @@ fn point_state<S: Scalar>(
     let point = cast3::<S>(point);
     match frame {
         Frame::World => (point, Vector3::zeros()),
+        Frame::Body(b) if ws.parallel[b] => (ws.origin[b] + point, ws.velocity[b]),
         Frame::Body(b) => {
             let r = ws.rotation[b] * point;
             (ws.origin[b] + r, ws.velocity[b] + ws.omega[b].cross(&r))
@@ -652,10 +698,21 @@ fn point_state<S: Scalar>(
     }
 }
 
-fn frame_rotation<S: Scalar>(frame: Frame, ws: &Workspace<S>) -> Matrix3<S> {
+/// The rotation of a frame, `None` when it is the identity for every state
+/// (the world, bodies parallel to it).
+fn frame_rotation<S: Scalar>(frame: Frame, ws: &Workspace<S>) -> Option<Matrix3<S>> {
     match frame {
-        Frame::World => Matrix3::identity(),
-        Frame::Body(b) => ws.rotation[b],
+        Frame::World => None,
+        Frame::Body(b) if ws.parallel[b] => None,
+        Frame::Body(b) => Some(ws.rotation[b]),
+    }
+}
+
+/// `rotation * v`, with `None` the identity.
+fn rotate<S: Scalar>(rotation: &Option<Matrix3<S>>, v: Vector3<S>) -> Vector3<S> {
+    match rotation {
+        Some(r) => r * v,
+        None => v,
     }
 }
 

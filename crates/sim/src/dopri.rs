@@ -272,6 +272,7 @@ impl DormandPrince {
         const SAFETY: f64 = 0.9;
         const BETA: f64 = 0.04;
         const ALPHA: f64 = 0.2 - BETA * 0.75;
+        let mut rejected = false;
         loop {
             let Some((h, lands)) = self.tol.next_step(self.t, self.h, t_stop) else {
                 return Err(StepFailure::StepSizeUnderflow {
@@ -293,6 +294,9 @@ impl DormandPrince {
                         SAFETY * (BETA * self.log_error_previous - ALPHA * log_error).exp();
                     factor.clamp(0.2, 10.0)
                 };
+                // After a rejection the step does not grow at once (Hairer's
+                // DOPRI5): a step at the stability limit would fail again.
+                let factor = if rejected { factor.min(1.0) } else { factor };
                 self.log_error_previous = log_error.max(1e-4f64.ln());
                 self.accept(h);
                 if lands {
@@ -308,6 +312,7 @@ impl DormandPrince {
                 return Ok(());
             }
             self.counts.rejected += 1;
+            rejected = true;
             let factor = if mean_square.is_finite() {
                 (SAFETY * (-0.5 * ALPHA * mean_square.ln()).exp()).clamp(0.2, 1.0)
             } else {
