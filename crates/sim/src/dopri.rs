@@ -74,6 +74,17 @@ impl Tolerances {
         let h_min = self.min_step_relative * t.abs().max(1.0);
         (h >= h_min || h >= remaining).then_some((h, lands))
     }
+
+    /// The next step suggestion after an accepted step of the proposed new
+    /// size: a step cut short to land on a stop time does not shrink it
+    /// below the suggestion it replaced.
+    pub fn suggestion_after(previous: f64, proposed: f64, landed: bool) -> f64 {
+        if landed {
+            previous.max(proposed)
+        } else {
+            proposed
+        }
+    }
 }
 
 /// Why a step attempt could not proceed.
@@ -303,12 +314,7 @@ impl DormandPrince {
                     // Land on the stop time exactly, not on t + (t_stop - t).
                     self.t = t_stop;
                 }
-                // A step cut short to land does not shrink the next one.
-                self.h = if lands {
-                    self.h.max(h * factor)
-                } else {
-                    h * factor
-                };
+                self.h = Tolerances::suggestion_after(self.h, h * factor, lands);
                 return Ok(());
             }
             self.counts.rejected += 1;

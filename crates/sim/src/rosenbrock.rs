@@ -200,11 +200,7 @@ impl Rosenbrock {
                 } else {
                     (0.9 * norm.powf(-1.0 / 3.0)).clamp(0.2, 5.0)
                 };
-                self.h = if lands {
-                    self.h.max(h * factor)
-                } else {
-                    h * factor
-                };
+                self.h = Tolerances::suggestion_after(self.h, h * factor, lands);
                 return Ok(());
             }
             self.counts.rejected += 1;
