@@ -4,9 +4,9 @@
 //! and eigenvalues shared with the 1-DOF model.
 
 use fistage_analysis::modal_analysis;
-use fistage_model::{EquilibriumKind, Inputs, Model};
+use fistage_model::{EquilibriumKind, EvaluationPath, Inputs, Model, ReferenceSample, StateKind};
 use fistage_sim::{Engine, Excitation, NativeEngine, ScenarioExcitation, SimSettings};
-use fistage_tests::{FREE_BODY, SplitMix, load, model_from, run, still};
+use fistage_tests::{CART_PENDULUM, FREE_BODY, SplitMix, load, model_from, run, still};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 /// Identical bearings at the centre-of-mass height: the table's x follows the
@@ -285,4 +285,124 @@ fn jacobian_matches_central_differences() {
             }
         }
     }
+}
+
+/// Two floating bodies (one on a rotated joint frame, one carrying a welded
+/// bracket) and three rail bodies (one on a turned rail), coupled by
+/// isolators of every end combination: floating to rail, with and without
+/// attach rotations and sharing their relative rotation; floating to
+/// floating; world to floating; rail to rail. Friction on a rail and on a
+/// floating body; sensors and actuators on both kinds.
+const ROOTED: &str = r#"<robot name="rooted" xmlns:fistage="urn:fistage:urdf:1">
+  <link name="world"/>
+  <link name="plate"><inertial><origin xyz="0.01 -0.02 0.03" rpy="0.2 -0.1 0.4"/><mass value="3.0"/>
+    <inertia ixx="0.02" ixy="0.001" ixz="-0.002" iyy="0.03" iyz="0.0005" izz="0.04"/></inertial></link>
+  <joint name="plate" type="floating"><origin xyz="0.1 0 0.05" rpy="0.1 0.2 -0.3"/><parent link="world"/><child link="plate"/></joint>
+  <link name="bracket"><inertial><origin xyz="0 0 -0.01"/><mass value="0.3"/>
+    <inertia ixx="1e-4" ixy="0" ixz="0" iyy="2e-4" iyz="0" izz="2e-4"/></inertial></link>
+  <joint name="bracket" type="fixed"><origin xyz="0 0.02 -0.01" rpy="0 0 0.3"/><parent link="plate"/><child link="bracket"/></joint>
+  <link name="carriage"><inertial><origin xyz="0.005 0 0.01"/><mass value="1.5"/>
+    <inertia ixx="0.004" ixy="0" ixz="0.0003" iyy="0.005" iyz="0" izz="0.006"/></inertial></link>
+  <joint name="carriage" type="floating"><origin xyz="-0.1 0.02 0.04"/><parent link="world"/><child link="carriage"/></joint>
+  <link name="shoe_a"><inertial><mass value="0.2"/><inertia ixx="1e-5" ixy="0" ixz="0" iyy="1e-5" iyz="0" izz="1e-5"/></inertial></link>
+  <joint name="rail_a" type="prismatic"><origin xyz="0.1 0.05 0"/><parent link="world"/><child link="shoe_a"/><axis xyz="1 0 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+  <link name="shoe_b"><inertial><mass value="0.25"/><inertia ixx="1e-5" ixy="0" ixz="0" iyy="1e-5" iyz="0" izz="1e-5"/></inertial></link>
+  <joint name="rail_b" type="prismatic"><origin xyz="0.1 -0.05 0" rpy="0 0.1 0.5"/><parent link="world"/><child link="shoe_b"/><axis xyz="0.6 0.8 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+  <link name="shoe_c"><inertial><mass value="0.15"/><inertia ixx="1e-5" ixy="0" ixz="0" iyy="1e-5" iyz="0" izz="1e-5"/></inertial></link>
+  <joint name="rail_c" type="prismatic"><origin xyz="-0.1 0.05 0"/><parent link="world"/><child link="shoe_c"/><axis xyz="1 0 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+  <fistage:isolator name="iso_a" parent="plate" child="shoe_a">
+    <origin xyz="0.05 0.05 -0.02"/><stiffness xyz="1e4 3e6 3e6" rpy="200 200 200"/><damping xyz="1 10 10" rpy="0.1 0.1 0.1"/></fistage:isolator>
+  <fistage:isolator name="iso_c" parent="plate" child="shoe_c">
+    <origin xyz="-0.05 0.05 -0.02"/><stiffness xyz="2e4 1e6 2e6" rpy="300 100 200"/><damping xyz="2 5 10" rpy="0.2 0.1 0.3"/></fistage:isolator>
+  <fistage:isolator name="iso_b" parent="bracket" child="shoe_b">
+    <origin xyz="0.01 -0.06 0.01" rpy="0.1 0 0.2"/><stiffness xyz="1e4 2e6 3e6" rpy="100 200 300"/><damping xyz="1 2 3" rpy="0.1 0.2 0.3"/></fistage:isolator>
+  <fistage:isolator name="iso_pc" parent="plate" child="carriage">
+    <origin xyz="-0.1 0 0.01" rpy="0 0.3 0"/><stiffness xyz="5e3 5e4 5e4" rpy="50 60 70"/><damping xyz="3 4 5" rpy="0.3 0.4 0.5"/></fistage:isolator>
+  <fistage:isolator name="iso_wc" parent="world" child="carriage">
+    <origin xyz="-0.12 0.03 0.05" rpy="0 0.2 0.1"/><stiffness xyz="1e3 2e3 3e3" rpy="10 20 30"/><damping xyz="1 1 1" rpy="0.1 0.1 0.1"/></fistage:isolator>
+  <fistage:isolator name="iso_ab" parent="shoe_a" child="shoe_b">
+    <origin xyz="0 -0.05 0" rpy="0.2 0 0"/><stiffness xyz="1e3 1e3 1e3" rpy="10 10 10"/><damping xyz="1 1 1" rpy="0.1 0.1 0.1"/></fistage:isolator>
+  <fistage:friction name="friction_a" link="shoe_a"><origin xyz="0 0 -0.007"/><axis xyz="1 0 0"/>
+    <lugre sigma0="5.5e5" sigma1="59.25" sigma2="3.55" f_c="1.275" f_s="1.625" v_s="0.0167"/></fistage:friction>
+  <fistage:friction name="friction_b" link="shoe_b"><origin xyz="0 0 -0.007"/><axis xyz="0.6 0.8 0"/>
+    <lugre sigma0="4e5" sigma1="50" sigma2="3" f_c="1" f_s="1.4" v_s="0.02"/></fistage:friction>
+  <fistage:friction name="friction_carriage" link="carriage"><origin xyz="0.01 0.02 -0.03"/><axis xyz="1 0 0"/>
+    <lugre sigma0="3e5" sigma1="40" sigma2="2" f_c="0.8" f_s="1.1" v_s="0.01"/></fistage:friction>
+  <fistage:actuator name="drive" link="bracket"><origin xyz="0.02 0 0.01"/><axis xyz="1 0.1 0"/></fistage:actuator>
+  <fistage:actuator name="push" link="shoe_b"><origin xyz="0 0 0"/><axis xyz="0.6 0.8 0"/></fistage:actuator>
+  <fistage:sensor name="encoder" link="plate"><origin xyz="0.03 -0.01 0.02"/><axis xyz="1 0 0"/></fistage:sensor>
+  <fistage:sensor name="rail_encoder" link="shoe_b"><origin xyz="0.01 0 0"/><axis xyz="0.6 0.8 0"/></fistage:sensor>
+</robot>"#;
+
+/// The rooted-bodies fast path gives the general recursive dynamics' state
+/// derivative at random states (large rotations, unnormalised quaternions,
+/// fast spins), with the servo on a floating body and on a rail body.
+#[test]
+fn rooted_fast_path_matches_the_general_dynamics() {
+    for (sensor, actuator) in [("encoder", "drive"), ("rail_encoder", "push")] {
+        let model = model_from(
+            ROOTED,
+            &format!(
+                "robot = \"x\"\nduration = 1\n[controller]\nsensor = \"{sensor}\"\nactuator = \"{actuator}\"\nk = 5e4\nc = 80\nk_i = 2e5\n"
+            ),
+        );
+        assert_eq!(model.evaluation_path(), EvaluationPath::RootedBodies);
+        let mut ws = model.workspace();
+        let mut rng = SplitMix(23);
+        let n = model.n_states();
+        let (mut fast, mut general) = (vec![0.0; n], vec![0.0; n]);
+        for _ in 0..300 {
+            let x: Vec<f64> = model
+                .layout
+                .kinds
+                .iter()
+                .map(|kind| match kind {
+                    StateKind::Quaternion => rng.range(-1.2, 1.2),
+                    StateKind::AngularVelocity => rng.range(-3.0, 3.0),
+                    StateKind::LinearVelocity => rng.range(-0.1, 0.1),
+                    StateKind::Bristle => rng.range(-5e-6, 5e-6),
+                    _ => rng.range(-0.01, 0.01),
+                })
+                .collect();
+            let inputs = Inputs {
+                reference: ReferenceSample {
+                    position: rng.range(-0.01, 0.01),
+                    velocity: rng.range(-0.02, 0.02),
+                },
+                servo_force: rng.range(-1.0, 1.0),
+                platform_velocity: rng.range(-0.03, 0.03),
+            };
+            model.rhs(&x, &inputs, &mut fast, &mut ws);
+            model.rhs_general(&x, &inputs.values(), &mut general, &mut ws);
+            let scale = general.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for (i, (a, b)) in fast.iter().zip(&general).enumerate() {
+                assert!(
+                    (a - b).abs() <= 1e-10 * a.abs().max(b.abs()) + 1e-13 * scale,
+                    "{}: fast path {a} vs general {b}",
+                    model.layout.names[i]
+                );
+            }
+        }
+    }
+}
+
+/// The four-bearing stage and the free body take the rooted fast path; a
+/// body on a body does not.
+#[test]
+fn evaluation_paths_follow_the_structure() {
+    assert_eq!(
+        load("scenarios/coupling/friction20_traverse.toml")
+            .model
+            .evaluation_path(),
+        EvaluationPath::RootedBodies
+    );
+    assert_eq!(free_body().evaluation_path(), EvaluationPath::RootedBodies);
+    assert_eq!(
+        load("scenarios/paper/fig05b_fi.toml")
+            .model
+            .evaluation_path(),
+        EvaluationPath::ConstantJacobian
+    );
+    let pendulum = model_from(CART_PENDULUM, "robot = \"x\"\nduration = 1\n");
+    assert_eq!(pendulum.evaluation_path(), EvaluationPath::General);
 }

@@ -610,6 +610,7 @@ impl<'a> Assembler<'a> {
             signals: Vec::new(),
             layout,
             translational_map: None,
+            rooted_plan: None,
             mass_blocks: Vec::new(),
         };
         model.signals = signal_list(&model);
@@ -777,6 +778,8 @@ fn check_mass_matrix(model: &mut Model, file: &Path) -> Result<(), LoadError> {
         model.translational_map = Some(crate::translational::TranslationalMap::build(
             model, &inverse,
         ));
+    } else {
+        model.rooted_plan = crate::rooted::RootedPlan::build(model);
     }
     Ok(())
 }

@@ -46,6 +46,22 @@ impl Inputs {
     }
 }
 
+/// How [`Model::rhs`] evaluates a model; every path gives the same state
+/// derivative as [`Model::rhs_general`] up to round-off.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EvaluationPath {
+    /// No joint rotates a body: kinematics are linear in the coordinates, so
+    /// constant Jacobian rows and a constant inverse mass matrix
+    /// (module `translational`).
+    ConstantJacobian,
+    /// Every body is jointed straight to the world, floating or on a rail:
+    /// one Newton-Euler body or rail mass each, coupled only through force
+    /// elements, with the geometry resolved at build time (module `rooted`).
+    RootedBodies,
+    /// Bodies in chains: recursive kinematics and a backward pass.
+    General,
+}
+
 /// Scratch space for evaluating a model without allocating. One per thread.
 #[derive(Debug, Clone)]
 pub struct Workspace<S: Scalar = f64> {
@@ -69,6 +85,8 @@ pub struct Workspace<S: Scalar = f64> {
     block_mass: Vec<Vec<S>>,
     block_rhs: Vec<Vec<S>>,
     pub(crate) generalized: Vec<f64>,
+    /// Scratch space of the rooted fast path ([`crate::rooted`]).
+    pub(crate) rooted: crate::rooted::RootedScratch,
     /// Per-element results of the last evaluation.
     pub elements: ElementValues<S>,
 }
@@ -161,6 +179,11 @@ impl Model {
                 .map(|b| vec![S::zero(); b.dofs.len()])
                 .collect(),
             generalized: vec![0.0; nv],
+            rooted: self
+                .rooted_plan
+                .as_ref()
+                .map(|plan| plan.scratch())
+                .unwrap_or_default(),
             elements: ElementValues {
                 friction_force: vec![S::zero(); nf],
                 slip_velocity: vec![S::zero(); nf],
@@ -191,14 +214,28 @@ impl Model {
         parallel
     }
 
+    /// Which evaluation [`Model::rhs`] takes for this model.
+    pub fn evaluation_path(&self) -> EvaluationPath {
+        if self.translational_map.is_some() {
+            EvaluationPath::ConstantJacobian
+        } else if self.rooted_plan.is_some() {
+            EvaluationPath::RootedBodies
+        } else {
+            EvaluationPath::General
+        }
+    }
+
     /// State derivative `dx = f(x, u)`. `x` and `dx` have [`Model::n_states`] entries.
-    /// Models without rotating joints take the exact constant-Jacobian path of
-    /// [`crate::translational`]; [`Model::rhs_general`] is the general path.
+    /// The evaluation depends on the structure (see [`EvaluationPath`]);
+    /// [`Model::rhs_general`] is the general path every model can take.
     #[inline]
     pub fn rhs(&self, x: &[f64], inputs: &Inputs, dx: &mut [f64], ws: &mut Workspace) {
-        match &self.translational_map {
-            Some(map) => map.rhs(self, x, inputs, dx, ws),
-            None => self.rhs_general(x, &inputs.values(), dx, ws),
+        if let Some(map) = &self.translational_map {
+            map.rhs(self, x, inputs, dx, ws);
+        } else if let Some(plan) = &self.rooted_plan {
+            plan.rhs(self, x, inputs, dx, ws);
+        } else {
+            self.rhs_general(x, &inputs.values(), dx, ws);
         }
     }
 
@@ -799,7 +836,7 @@ impl Model {
 }
 
 /// The rotation vector (axis times angle) of a rotation matrix.
-fn rotation_log<S: Scalar>(r: &Matrix3<S>) -> Vector3<S> {
+pub(crate) fn rotation_log<S: Scalar>(r: &Matrix3<S>) -> Vector3<S> {
     let half = S::constant(0.5);
     let skew = Vector3::new(
         r[(2, 1)] - r[(1, 2)],

@@ -15,13 +15,14 @@ pub mod lugre;
 pub mod model;
 pub mod reference;
 pub mod robot;
+mod rooted;
 pub mod scalar;
 pub mod scenario;
 mod translational;
 
 pub use assembly::{Loaded, assemble, load};
 pub use body_motion::{BodyMotion, BodyWrench};
-pub use dynamics::{ElementValues, InputValues, Workspace};
+pub use dynamics::{ElementValues, EvaluationPath, InputValues, Workspace};
 pub use equilibrium::{EquilibriumError, EquilibriumKind};
 pub use error::LoadError;
 pub use linearize::Tangent;

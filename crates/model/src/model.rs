@@ -333,6 +333,8 @@ pub struct Model {
     pub(crate) mass_blocks: Vec<MassBlock>,
     /// Constant Jacobians of a translational model.
     pub(crate) translational_map: Option<crate::translational::TranslationalMap>,
+    /// Resolved geometry of a model whose bodies all hang from the world.
+    pub(crate) rooted_plan: Option<crate::rooted::RootedPlan>,
 }
 
 impl Model {
