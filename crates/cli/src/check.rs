@@ -1,10 +1,10 @@
 //! `fistage check SCENARIO`: load and validate a scenario and its robot without
 //! simulating, and print what was assembled: bodies, joints, elements, the
-//! state layout and the output signals.
+//! evaluation path, the state layout and the output signals.
 
 use std::path::PathBuf;
 
-use fistage_model::{Frame, JointMotion, Model};
+use fistage_model::{EvaluationPath, Frame, JointMotion, Model};
 
 /// Arguments of `fistage check`.
 #[derive(clap::Args)]
@@ -21,6 +21,7 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     println!("robot {} ({})", model.name, loaded.scenario.robot.display());
     print_bodies(model);
     print_elements(model);
+    println!("evaluation: {}", evaluation_path(model.evaluation_path()));
     println!("states ({}):", model.n_states());
     for ((name, kind), nominal) in model
         .layout
@@ -36,6 +37,18 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
         println!("  {} [{}]", signal.name, signal.unit);
     }
     Ok(())
+}
+
+fn evaluation_path(path: EvaluationPath) -> &'static str {
+    match path {
+        EvaluationPath::ConstantJacobian => {
+            "constant Jacobian rows (no joint turns a body: kinematics linear in the coordinates)"
+        }
+        EvaluationPath::RootedBodies => {
+            "rooted bodies (every body jointed straight to the world: free Newton-Euler bodies and rail masses)"
+        }
+        EvaluationPath::General => "general recursive dynamics (bodies in chains)",
+    }
 }
 
 fn frame_name(model: &Model, frame: Frame) -> String {

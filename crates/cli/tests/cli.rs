@@ -119,6 +119,10 @@ fn check_prints_the_assembled_model() {
     assert!(stdout.contains("mass 1.500000 kg"), "{stdout}");
     assert!(stdout.contains("links table, bearing"), "{stdout}");
     assert!(stdout.contains("bearing_friction.z"), "{stdout}");
+    assert!(
+        stdout.contains("evaluation: constant Jacobian rows"),
+        "{stdout}"
+    );
 }
 
 /// A small Fig. 6b sweep: two shards merged, and a run resumed after a partial
