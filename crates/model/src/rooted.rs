@@ -49,6 +49,15 @@ struct RailBody {
     gravity_along: f64,
 }
 
+/// Where a rail body's rail lies: direction, and the joint frame (the body's
+/// pose at q = 0).
+#[derive(Debug, Clone, PartialEq)]
+struct RailGeometry {
+    axis: Vector3<f64>,
+    rotation: Matrix3<f64>,
+    origin: Vector3<f64>,
+}
+
 /// What carries one end of an element.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Carrier {
@@ -222,7 +231,11 @@ impl RootedPlan {
                             inverse_mass: 1.0 / body.mass,
                             gravity_along: rail_axis.dot(&model.gravity),
                         },
-                        rail_axis,
+                        RailGeometry {
+                            axis: rail_axis,
+                            rotation: joint.origin_rotation,
+                            origin: joint.origin.translation.vector,
+                        },
                     ));
                 }
                 JointMotion::Revolute { .. } => return None,
@@ -231,18 +244,6 @@ impl RootedPlan {
         let carrier = |frame: Frame| match frame {
             Frame::World => Carrier::World,
             Frame::Body(b) => carriers[b],
-        };
-        // Pose of a rail body at q = 0: the joint frame.
-        let rail_pose = |index: usize| {
-            let body = model
-                .bodies
-                .iter()
-                .zip(&carriers)
-                .find(|(_, c)| **c == Carrier::Rail(index))
-                .map(|(b, _)| b);
-            body.map_or((Matrix3::identity(), Vector3::zeros()), |b| {
-                (b.joint.origin_rotation, b.joint.origin.translation.vector)
-            })
         };
         let isolator_end =
             |frame: Frame, attach: &nalgebra::Isometry3<f64>, rotation: Matrix3<f64>| {
@@ -256,12 +257,12 @@ impl RootedPlan {
                         attach: unless_identity(rotation),
                     },
                     Carrier::Rail(r) => {
-                        let (pose_rotation, pose_origin) = rail_pose(r);
+                        let rail = &rails[r].1;
                         IsolatorEnd {
                             carrier,
-                            point: pose_origin + pose_rotation * local,
-                            rail_axis: rails[r].1,
-                            attach: unless_identity(pose_rotation * rotation),
+                            point: rail.origin + rail.rotation * local,
+                            rail_axis: rail.axis,
+                            attach: unless_identity(rail.rotation * rotation),
                         }
                     }
                     Carrier::Floating(_) => IsolatorEnd {
@@ -285,9 +286,10 @@ impl RootedPlan {
                 isolator.attach_rotations[1],
             );
             let turns = |end: &IsolatorEnd| matches!(end.carrier, Carrier::Floating(_));
+            // Same carrier and attach rotation, or two ends that do not turn
+            // with the same (constant) world rotation.
             let same_rotation = |a: &IsolatorEnd, b: &IsolatorEnd| {
-                a.carrier == b.carrier && a.attach == b.attach
-                    || !turns(a) && !turns(b) && a.attach == b.attach
+                a.attach == b.attach && (a.carrier == b.carrier || (!turns(a) && !turns(b)))
             };
             let relative_rotation = if !turns(&parent) && !turns(&child) {
                 let relative = compose(&parent.attach.map(|m| m.transpose()), &child.attach);
@@ -311,20 +313,21 @@ impl RootedPlan {
         let point_on_body = |body: usize, point: &Vector3<f64>, axis: &Vector3<f64>, zero: f64| {
             match carriers[body] {
                 Carrier::Rail(r) => {
-                    let (rotation, origin) = rail_pose(r);
-                    PointOnBody::Rail {
+                    let rail = &rails[r].1;
+                    Some(PointOnBody::Rail {
                         body: r,
-                        along: rails[r].1.dot(axis),
-                        offset: (origin + rotation * point).dot(axis) - zero,
-                    }
+                        along: rail.axis.dot(axis),
+                        offset: (rail.origin + rail.rotation * point).dot(axis) - zero,
+                    })
                 }
-                Carrier::Floating(f) => PointOnBody::Floating {
+                Carrier::Floating(f) => Some(PointOnBody::Floating {
                     body: f,
                     point: *point,
                     axis: *axis,
                     zero_offset: zero,
-                },
-                Carrier::World => unreachable!("bodies are carried by rails or float"),
+                }),
+                // Every body is carried by a rail or floats.
+                Carrier::World => None,
             }
         };
         Some(Self {
@@ -332,17 +335,17 @@ impl RootedPlan {
                 .frictions
                 .iter()
                 .map(|f| point_on_body(f.body, &f.point, &f.axis, f.zero_offset))
-                .collect(),
+                .collect::<Option<_>>()?,
             sensors: model
                 .sensors
                 .iter()
                 .map(|s| point_on_body(s.body, &s.point, &s.axis, s.zero_offset))
-                .collect(),
+                .collect::<Option<_>>()?,
             actuators: model
                 .actuators
                 .iter()
                 .map(|a| point_on_body(a.body, &a.point, &a.axis, 0.0))
-                .collect(),
+                .collect::<Option<_>>()?,
             floating,
             rails: rails.into_iter().map(|(rail, _)| rail).collect(),
             isolators,
@@ -412,8 +415,7 @@ impl RootedPlan {
         }
     }
 
-    /// Where an isolator end is and how fast its material point at `there`
-    /// moves, world frame; `there` defaults to the end's own point.
+    /// Where an isolator end's point is, world frame.
     #[inline(always)]
     fn end_point(end: &IsolatorEnd, scratch: &RootedScratch) -> Vector3<f64> {
         match end.carrier {
