@@ -103,6 +103,33 @@ fn symmetric_stage_contains_the_one_dof_eigenvalues() {
     }
 }
 
+/// A stuck LuGre contact conserves z minus its displacement (z' = v at zero
+/// slip): one zero eigenvalue per stuck bearing, flagged neutral, and none
+/// when every bearing slips.
+#[test]
+fn each_stuck_bearing_adds_one_neutral_mode() {
+    for (file, bearings) in [
+        ("scenarios/paper/fig05b_fi.toml", 1),
+        ("scenarios/coupling/mismatch_fc20_fig05b.toml", 4),
+    ] {
+        let loaded = load(file);
+        let inputs = ScenarioExcitation::from_scenario(&loaded.scenario).inputs(0.0);
+        for (kind, neutral) in [
+            (EquilibriumKind::Sticking, bearings),
+            (EquilibriumKind::Slipping, 0),
+        ] {
+            let analysis = modal_analysis(&loaded.model, &inputs, kind, &loaded.model.zero_state())
+                .expect("modes");
+            assert_eq!(analysis.neutral, neutral, "{file} {kind:?}");
+            let flagged: Vec<_> = analysis.modes.iter().filter(|m| m.neutral).collect();
+            assert_eq!(flagged.len(), neutral, "{file} {kind:?}");
+            for mode in flagged {
+                assert!(mode.real.abs() < 1e-9 && mode.imag == 0.0, "{mode:?}");
+            }
+        }
+    }
+}
+
 fn free_body() -> Model {
     model_from(
         FREE_BODY,

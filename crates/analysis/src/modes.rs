@@ -41,8 +41,12 @@ pub struct Mode {
     pub frequency_hz: f64,
     /// Damped frequency Im(lambda) / 2 pi, Hz (0 for a real eigenvalue).
     pub damped_frequency_hz: f64,
-    /// Damping ratio -Re(lambda) / |lambda| (1 for a decaying real eigenvalue, < 0 unstable).
+    /// Damping ratio -Re(lambda) / |lambda| (1 for a decaying real eigenvalue, < 0 unstable;
+    /// meaningless for a neutral eigenvalue, whose sign is round-off).
     pub damping_ratio: f64,
+    /// Whether the eigenvalue is zero to round-off (|lambda| below 1e-8 of the
+    /// Jacobian's norm): a free coordinate, such as a stuck bearing's position.
+    pub neutral: bool,
     /// Whether the eigenvalue is complex.
     pub oscillatory: bool,
     /// Kinetic-energy participation per position coordinate.
@@ -201,6 +205,7 @@ pub fn modal_analysis(
                 0.0
             },
             oscillatory: pair.value.im > 1e-9 * magnitude.max(1.0),
+            neutral: false,
             participation,
             bristle_share,
             dominant,
@@ -208,11 +213,13 @@ pub fn modal_analysis(
         });
     }
     let scale = jacobian.norm().max(1.0);
-    let is_neutral = |m: &Mode| (m.real * m.real + m.imag * m.imag).sqrt() < 1e-8 * scale;
-    let neutral = modes.iter().filter(|m| is_neutral(m)).count();
+    for mode in &mut modes {
+        mode.neutral = (mode.real * mode.real + mode.imag * mode.imag).sqrt() < 1e-8 * scale;
+    }
+    let neutral = modes.iter().filter(|m| m.neutral).count();
     let max_real_part = modes
         .iter()
-        .filter(|m| !is_neutral(m))
+        .filter(|m| !m.neutral)
         .map(|m| m.real)
         .fold(f64::NEG_INFINITY, f64::max);
     Ok(ModalAnalysis {

@@ -147,11 +147,17 @@ fn print_table(analysis: &ModalAnalysis) {
     );
     for (k, mode) in analysis.modes.iter().enumerate() {
         let is = |c: &str, axis: &str| c == format!("{table}.{axis}");
+        // A neutral eigenvalue's damping ratio is the sign of its round-off.
+        let zeta = if mode.neutral {
+            "neutral".to_string()
+        } else {
+            format!("{:.4}", mode.damping_ratio)
+        };
         println!(
-            "{:>3} {:>11.3} {:>9.4} {:>12.4e} {:>12.4e}  {:>6.3} {:>6.3} {:>6.3} {:>6.3} {:>8.3} {:>7.3}  {}",
+            "{:>3} {:>11.3} {:>9} {:>12.4e} {:>12.4e}  {:>6.3} {:>6.3} {:>6.3} {:>6.3} {:>8.3} {:>7.3}  {}",
             k + 1,
             mode.frequency_hz,
-            mode.damping_ratio,
+            zeta,
             mode.real,
             mode.imag,
             share_of(mode, |c| is(c, "x")),
