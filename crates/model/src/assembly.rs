@@ -752,7 +752,8 @@ fn mass_blocks(model: &mut Model, mass: &nalgebra::DMatrix<f64>) -> Vec<MassBloc
 
 /// The mass matrix must be positive definite at the zero configuration (every
 /// degree of freedom carries mass or inertia); when no joint rotates a body it
-/// is constant and its factor is kept.
+/// is constant and its factor is kept (the constant-Jacobian path), otherwise
+/// the rooted-bodies plan is built when the structure allows it.
 fn check_mass_matrix(model: &mut Model, file: &Path) -> Result<(), LoadError> {
     let x = model.zero_state();
     let mass = dynamics::mass_matrix(model, &x);

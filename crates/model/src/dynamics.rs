@@ -87,7 +87,9 @@ pub struct Workspace<S: Scalar = f64> {
     pub(crate) generalized: Vec<f64>,
     /// Scratch space of the rooted fast path ([`crate::rooted`]).
     pub(crate) rooted: crate::rooted::RootedScratch,
-    /// Per-element results of the last evaluation.
+    /// Per-element results of the last [`Model::evaluate`] or [`Model::outputs`]
+    /// (the fast paths of [`Model::rhs`] fill only the sensor, actuator and
+    /// tracking-error entries).
     pub elements: ElementValues<S>,
 }
 
@@ -858,8 +860,31 @@ pub(crate) fn rotation_log<S: Scalar>(r: &Matrix3<S>) -> Vector3<S> {
         let sin = sin_squared.sqrt();
         return skew * (sin.atan2(cos) / sin);
     }
-    // Near half a turn the skew part loses the axis: fall back to the quaternion.
-    Rotation3::from_matrix_unchecked(*r).scaled_axis()
+    // Near half a turn the skew part (sin(angle) times the axis) loses the
+    // axis; the symmetric part keeps it: (R + R^T)/2 - cos I = (1 - cos) a a^T.
+    // The largest diagonal entry gives one component, its row the others; the
+    // skew part, however small, gives the sign (at exactly half a turn both
+    // signs are the same rotation).
+    let scale = S::one() - cos;
+    let outer = |i: usize, j: usize| {
+        let symmetric = (r[(i, j)] + r[(j, i)]) * half;
+        if i == j { symmetric - cos } else { symmetric }
+    };
+    let pivot = (0..3)
+        .max_by(|&a, &b| outer(a, a).value().total_cmp(&outer(b, b).value()))
+        .unwrap_or(0);
+    let pivot_component = (outer(pivot, pivot) / scale).sqrt();
+    let mut axis = Vector3::from_fn(|j, _| {
+        if j == pivot {
+            pivot_component
+        } else {
+            outer(pivot, j) / (scale * pivot_component)
+        }
+    });
+    if axis.dot(&skew).value() < 0.0 {
+        axis = -axis;
+    }
+    axis * sin_squared.sqrt().atan2(cos)
 }
 
 fn apply_wrench<S: Scalar>(
@@ -1088,6 +1113,7 @@ pub fn mass_matrix(model: &Model, x: &[f64]) -> DMatrix<f64> {
 mod tests {
     use super::rotation_log;
     use nalgebra::{Rotation3, Unit, Vector3};
+    use std::f64::consts::PI;
 
     /// The rotation vector comes back from its matrix on every branch: the
     /// small-angle series (and across its edge near 0.01 rad), the arctangent,
@@ -1110,21 +1136,24 @@ mod tests {
             0.2,
             1.0,
             2.5,
+            3.0,
             3.1,
-            std::f64::consts::PI - 1e-5,
+            PI - 1e-5,
+            PI - 1e-9,
+            PI,
         ];
         for axis in axes {
             let axis = Unit::new_normalize(axis);
             for angle in angles {
                 let v = axis.into_inner() * angle;
                 let back = rotation_log(Rotation3::from_scaled_axis(v).matrix());
-                // Near half a turn the axis is ill-conditioned in the matrix.
-                let tolerance = if angle < 3.0 {
-                    4e-16 * angle.max(1.0)
+                // At exactly half a turn -v is the same rotation.
+                let error = if angle == PI {
+                    (back - v).norm().min((back + v).norm())
                 } else {
-                    1e-10
+                    (back - v).norm()
                 };
-                assert!((back - v).norm() <= tolerance, "{v:?} -> {back:?}");
+                assert!(error <= 2e-15 * angle.max(1.0), "{v:?} -> {back:?}");
             }
         }
     }

@@ -10,9 +10,11 @@
 //! the model is built: which kind of body carries each element end, attach
 //! points and rotations in the frame they are applied in, rail directions
 //! projected on element axes, isolators whose relative rotation is constant or
-//! repeats an earlier one. The element laws (LuGre, bushing, servo) are the
-//! same functions the general recursive dynamics in [`crate::dynamics`] call;
-//! a test checks that both paths give the same state derivative.
+//! repeats an earlier one, masses, inertias and gravity. The element
+//! parameters (bushing stiffness and damping, LuGre, servo gains) are read
+//! from the model at each call, and their laws are the same functions the
+//! general recursive dynamics in [`crate::dynamics`] call; a test checks that
+//! both paths give the same state derivative.
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -129,6 +131,8 @@ pub(crate) struct RootedPlan {
     frictions: Vec<PointOnBody>,
     sensors: Vec<PointOnBody>,
     actuators: Vec<PointOnBody>,
+    /// Gravity in the world, m/s^2.
+    gravity: Vector3<f64>,
 }
 
 /// State of a floating body during one evaluation, world frame.
@@ -158,7 +162,7 @@ pub(crate) struct RailState {
 pub(crate) struct RootedScratch {
     floating: Vec<FloatingState>,
     rails: Vec<RailState>,
-    /// Per isolator: relative rotation vector and rate, attach axes.
+    /// Per isolator: relative rotation vector and rate, in the parent's attach axes.
     relative: Vec<(Vector3<f64>, Vector3<f64>)>,
 }
 
@@ -195,8 +199,9 @@ fn compose(a: &Option<Matrix3<f64>>, b: &Option<Matrix3<f64>>) -> Option<Matrix3
 }
 
 impl RootedPlan {
-    /// The plan for `model`, or `None` when some body hangs from another body
-    /// or turns about a revolute joint (the general path handles those).
+    /// The plan for `model`, or `None` when some body hangs from another body,
+    /// turns about a revolute joint or floats with a singular inertia (the
+    /// general path handles those).
     pub(crate) fn build(model: &Model) -> Option<Self> {
         let mut carriers = Vec::with_capacity(model.bodies.len());
         let mut floating = Vec::new();
@@ -349,6 +354,7 @@ impl RootedPlan {
             floating,
             rails: rails.into_iter().map(|(rail, _)| rail).collect(),
             isolators,
+            gravity: model.gravity,
         })
     }
 
@@ -370,11 +376,16 @@ impl RootedPlan {
         dx: &mut [f64],
         ws: &mut Workspace,
     ) {
+        debug_assert!(
+            ws.rooted.floating.len() == self.floating.len()
+                && ws.rooted.rails.len() == self.rails.len(),
+            "a workspace made for another model"
+        );
         self.body_states(x, dx, &mut ws.rooted);
         self.isolator_forces(model, &mut ws.rooted);
         self.servo(model, x, inputs, ws);
         self.friction_forces(model, x, inputs, dx, &mut ws.rooted);
-        self.accelerations(&model.gravity, dx, &ws.rooted);
+        self.accelerations(dx, &ws.rooted);
         if let Some(index) = model.controller.as_ref().and_then(|c| c.integral_index) {
             dx[index] = ws.elements.tracking_error;
         }
@@ -620,7 +631,7 @@ impl RootedPlan {
     }
 
     /// Newton-Euler for each floating body, the rail law for each rail body.
-    fn accelerations(&self, gravity: &Vector3<f64>, dx: &mut [f64], scratch: &RootedScratch) {
+    fn accelerations(&self, dx: &mut [f64], scratch: &RootedScratch) {
         for (body, state) in self.floating.iter().zip(&scratch.floating) {
             let rotation = &state.rotation;
             let omega = state.omega;
@@ -631,7 +642,7 @@ impl RootedPlan {
             let omega_body = rotation.tr_mul(&omega);
             let spin = omega_body.cross(&(body.inertia * omega_body));
             let alpha = rotation * (body.inverse_inertia * (moment - spin));
-            let accel = state.force * body.inverse_mass + gravity
+            let accel = state.force * body.inverse_mass + self.gravity
                 - alpha.cross(&arm)
                 - omega.cross(&omega.cross(&arm));
             let accel = to_local(&body.joint_rotation, accel);
