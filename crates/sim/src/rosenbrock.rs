@@ -65,6 +65,7 @@ pub struct Rosenbrock {
     jacobian: DMatrix<f64>,
     jacobian_age: u32,
     previous: (f64, f64, Vec<f64>, Vec<f64>),
+    buffers: StageBuffers,
     /// Counters (RHS evaluations include those inside Jacobians, one per column).
     pub counts: StepCounts,
     /// Jacobians computed.
@@ -91,6 +92,7 @@ impl Rosenbrock {
             jacobian: DMatrix::zeros(n, n),
             jacobian_age: JACOBIAN_REUSE,
             previous: (t0, 0.0, x0.to_vec(), vec![0.0; n]),
+            buffers: StageBuffers::new(n),
             counts: StepCounts::default(),
             jacobians: 0,
         };
@@ -112,7 +114,8 @@ impl Rosenbrock {
         self.jacobian_age = 0;
     }
 
-    fn error_norm(&self, x_new: &[f64], error: &DVector<f64>) -> f64 {
+    fn error_norm(&self) -> f64 {
+        let (x_new, error) = (&self.buffers.x_new, &self.buffers.error);
         let mut sum = 0.0;
         for i in 0..self.n {
             let scale = self.tol.atol[i] + self.tol.rtol * self.x[i].abs().max(x_new[i].abs());
@@ -121,39 +124,64 @@ impl Rosenbrock {
         (sum / self.n as f64).sqrt()
     }
 
-    /// The four stages of a step of length h: the new state and the error
-    /// estimate, or None when `I - h gamma J` cannot be solved.
-    fn stages(
-        &mut self,
-        system: &mut dyn JacobianSystem,
-        h: f64,
-    ) -> Option<(DVector<f64>, DVector<f64>)> {
+    /// The four stages of a step of length h, leaving the new state and the
+    /// error estimate in the buffers; false when `I - h gamma J` cannot be
+    /// solved.
+    fn stages(&mut self, system: &mut dyn JacobianSystem, h: f64) -> bool {
         let n = self.n;
-        let lu = (DMatrix::identity(n, n) - &self.jacobian * (h * GAMMA)).lu();
-        let x = DVector::from_column_slice(&self.x);
-        let mut stage = vec![0.0; n];
-        let mut f_stage = vec![0.0; n];
-        let mut evaluate = |t: f64, y: &DVector<f64>| {
-            stage.copy_from_slice(y.as_slice());
-            system.rhs(t, &stage, &mut f_stage);
-            DVector::from_column_slice(&f_stage)
-        };
-        let j = &self.jacobian;
-        let k1 = lu.solve(&(DVector::from_column_slice(&self.f) * h))?;
-        let f2 = evaluate(self.t + C2 * h, &(&x + &k1 * A21));
-        let k2 = lu.solve(&(f2 * h + j * (&k1 * (G21 * h))))?;
-        let f3 = evaluate(self.t + C3 * h, &(&x + &k1 * A31 + &k2 * A32));
-        let k3 = lu.solve(&(f3 * h + j * ((&k1 * G31 + &k2 * G32) * h)))?;
-        let f4 = evaluate(self.t + h, &(&x + &k3));
-        let k4 = lu.solve(&(f4 * h + j * ((&k1 * G41 + &k2 * G42 + &k3 * G43) * h)))?;
-        self.counts.rhs_evaluations += 3;
-        let mut x_new = x;
-        let mut error = DVector::zeros(n);
-        for (i, k) in [k1, k2, k3, k4].iter().enumerate() {
-            x_new += k * B[i];
-            error += k * (B[i] - B_EMBEDDED[i]);
+        let buffers = &mut self.buffers;
+        buffers.w.copy_from(&self.jacobian);
+        buffers.w *= -h * GAMMA;
+        for i in 0..n {
+            buffers.w[(i, i)] += 1.0;
         }
-        Some((x_new, error))
+        let lu = buffers.w.clone().lu();
+        // Stage i: (I - h gamma J) k_i = h f(x + sum_j a_ij k_j) + J (h sum_j g_ij k_j).
+        let stage_times = [self.t, self.t + C2 * h, self.t + C3 * h, self.t + h];
+        let a: [&[f64]; 4] = [&[], &[A21], &[A31, A32], &[0.0, 0.0, 1.0]];
+        let g: [&[f64]; 4] = [&[], &[G21], &[G31, G32], &[G41, G42, G43]];
+        for stage in 0..4 {
+            let (done, rest) = buffers.k.split_at_mut(stage);
+            let k = &mut rest[0];
+            if stage == 0 {
+                k.as_mut_slice().copy_from_slice(&self.f);
+            } else {
+                for i in 0..n {
+                    buffers.y[i] = self.x[i]
+                        + a[stage]
+                            .iter()
+                            .zip(done.iter())
+                            .map(|(a, k)| a * k[i])
+                            .sum::<f64>();
+                }
+                system.rhs(stage_times[stage], buffers.y.as_slice(), k.as_mut_slice());
+            }
+            *k *= h;
+            if stage > 0 {
+                for i in 0..n {
+                    buffers.y[i] = h * g[stage]
+                        .iter()
+                        .zip(done.iter())
+                        .map(|(g, k)| g * k[i])
+                        .sum::<f64>();
+                }
+                k.gemv(1.0, &self.jacobian, &buffers.y, 1.0);
+            }
+            if !lu.solve_mut(k) {
+                return false;
+            }
+        }
+        self.counts.rhs_evaluations += 3;
+        for i in 0..n {
+            let (mut step, mut error) = (0.0, 0.0);
+            for (s, k) in buffers.k.iter().enumerate() {
+                step += B[s] * k[i];
+                error += (B[s] - B_EMBEDDED[s]) * k[i];
+            }
+            buffers.x_new[i] = self.x[i] + step;
+            buffers.error[i] = error;
+        }
+        true
     }
 
     /// Takes one accepted step, not beyond `t_stop`.
@@ -162,7 +190,6 @@ impl Rosenbrock {
         system: &mut dyn JacobianSystem,
         t_stop: f64,
     ) -> Result<(), StepFailure> {
-        let n = self.n;
         loop {
             let Some((h, lands)) = self.tol.next_step(self.t, self.h, t_stop) else {
                 return Err(StepFailure::StepSizeUnderflow {
@@ -174,24 +201,24 @@ impl Rosenbrock {
             if self.jacobian_age >= JACOBIAN_REUSE {
                 self.refresh_jacobian(system);
             }
-            let Some((x_new, error)) = self.stages(system, h) else {
+            if !self.stages(system, h) {
                 // I - h gamma J is singular at this step: try a shorter one.
                 self.counts.rejected += 1;
                 self.h = h * 0.25;
                 continue;
-            };
-            let norm = self.error_norm(x_new.as_slice(), &error);
+            }
+            let norm = self.error_norm();
             if norm.is_finite() && norm <= 1.0 {
-                let mut f_new = vec![0.0; n];
-                system.rhs(self.t + h, x_new.as_slice(), &mut f_new);
+                // The old point becomes the start of the dense output, the
+                // new one the current state.
+                self.previous.0 = self.t;
+                self.previous.1 = h;
+                std::mem::swap(&mut self.previous.2, &mut self.x);
+                std::mem::swap(&mut self.previous.3, &mut self.f);
+                self.x.copy_from_slice(&self.buffers.x_new);
+                system.rhs(self.t + h, &self.x, &mut self.f);
                 self.counts.rhs_evaluations += 1;
                 let t_new = if lands { t_stop } else { self.t + h };
-                self.previous = (
-                    self.t,
-                    h,
-                    std::mem::replace(&mut self.x, x_new.as_slice().to_vec()),
-                    std::mem::replace(&mut self.f, f_new),
-                );
                 self.t = t_new;
                 self.counts.steps += 1;
                 self.jacobian_age += 1;
@@ -204,8 +231,11 @@ impl Rosenbrock {
                 return Ok(());
             }
             self.counts.rejected += 1;
-            // A rejection may come from a stale Jacobian: refresh it.
-            self.jacobian_age = JACOBIAN_REUSE;
+            // A rejection may come from a stale Jacobian: refresh it, unless
+            // it was taken at this very point (it would come out the same).
+            if self.jacobian_age > 0 {
+                self.jacobian_age = JACOBIAN_REUSE;
+            }
             let factor = if norm.is_finite() {
                 (0.9 * norm.powf(-1.0 / 3.0)).clamp(0.1, 0.9)
             } else {
@@ -230,6 +260,28 @@ impl Rosenbrock {
         let h11 = theta * theta * (theta - 1.0);
         for i in 0..self.n {
             out[i] = h00 * x0[i] + h * h10 * f0[i] + h01 * x1[i] + h * h11 * f1[i];
+        }
+    }
+}
+
+/// Scratch space of one step, allocated once.
+struct StageBuffers {
+    /// `I - h gamma J`.
+    w: DMatrix<f64>,
+    k: [DVector<f64>; 4],
+    y: DVector<f64>,
+    x_new: Vec<f64>,
+    error: Vec<f64>,
+}
+
+impl StageBuffers {
+    fn new(n: usize) -> Self {
+        Self {
+            w: DMatrix::zeros(n, n),
+            k: std::array::from_fn(|_| DVector::zeros(n)),
+            y: DVector::zeros(n),
+            x_new: vec![0.0; n],
+            error: vec![0.0; n],
         }
     }
 }
