@@ -348,28 +348,22 @@ impl Instance {
         if self.values == self.model_values {
             return Ok(());
         }
+        // The file's values with the scenario's overrides, then the importer's
+        // values through the parameter table (each checked by its rule).
         let mut scenario = self.source.scenario.clone();
+        let mut robot = self.source.robot.clone();
+        let rejected = |e: LoadError| CallError::Model(format!("parameters rejected: {e}"));
+        fistage_model::assembly::apply_overrides(&mut robot, &scenario).map_err(rejected)?;
+        scenario.overrides.clear();
         for variable in &self.variables {
-            let value = self.values[variable.value_reference as usize];
-            match &variable.binding {
-                Binding::ControllerGain(index) => {
-                    if let Some(controller) = scenario.controller.as_mut() {
-                        *[&mut controller.k, &mut controller.c, &mut controller.k_i][*index] =
-                            value;
-                    }
-                }
-                Binding::Element { element, key } => {
-                    scenario.overrides.push(fistage_model::Override {
-                        target: element.clone(),
-                        key: (*key).to_string(),
-                        value,
-                    });
-                }
-                Binding::Input(_) | Binding::Output(_) => {}
+            if let Binding::Parameter(parameter) = &variable.binding {
+                let value = self.values[variable.value_reference as usize];
+                parameter
+                    .write(&mut scenario, &mut robot, value)
+                    .map_err(|e| CallError::Model(format!("parameter {}: {e}", variable.name)))?;
             }
         }
-        let (_, model) = assemble(self.source.robot.clone(), &scenario)
-            .map_err(|e| CallError::Model(format!("parameters rejected: {e}")))?;
+        let (_, model) = assemble(robot, &scenario).map_err(rejected)?;
         self.model = model;
         self.workspace = self.model.workspace();
         self.model_values = self.values.clone();

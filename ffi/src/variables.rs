@@ -1,9 +1,10 @@
 //! The variables an exported stage offers, in value-reference order:
-//! parameters (servo gains, every LuGre contact's six parameters, every
-//! isolator's stiffness and damping), then the model inputs (reference,
-//! external servo force, platform velocity), then every output signal.
+//! parameters (the entries of the model's parameter table that an FMU offers:
+//! servo gains, every LuGre contact's six parameters, every isolator's
+//! stiffness and damping), then the model inputs (reference, external servo
+//! force, platform velocity), then every output signal.
 
-use fistage_model::{Inputs, LugreParams, Model, Scenario};
+use fistage_model::{Inputs, Model, Parameter, Scenario};
 
 /// Role of a variable (FMI 2.0 causality).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -19,15 +20,8 @@ pub enum Causality {
 /// What a variable reads or writes in the model.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Binding {
-    /// Servo gain: 0 = k, 1 = c, 2 = k_i.
-    ControllerGain(usize),
-    /// A parameter of a named force element, as a scenario override would set it.
-    Element {
-        /// Element name (LuGre contact or isolator).
-        element: String,
-        /// Override key, e.g. `sigma0` or `k_x`.
-        key: &'static str,
-    },
+    /// An entry of the model's parameter table, written with its rule.
+    Parameter(Parameter),
     /// Model input, index into [`Inputs::NAMES`].
     Input(usize),
     /// Model output signal, index into the model's signals.
@@ -53,22 +47,6 @@ pub struct Variable {
     pub binding: Binding,
 }
 
-const LUGRE_UNITS: [&str; 6] = ["N/m", "N.s/m", "N.s/m", "N", "N", "m/s"];
-const ISOLATOR_KEYS: [(&str, &str); 12] = [
-    ("k_x", "N/m"),
-    ("k_y", "N/m"),
-    ("k_z", "N/m"),
-    ("k_rx", "N.m/rad"),
-    ("k_ry", "N.m/rad"),
-    ("k_rz", "N.m/rad"),
-    ("c_x", "N.s/m"),
-    ("c_y", "N.s/m"),
-    ("c_z", "N.s/m"),
-    ("c_rx", "N.m.s/rad"),
-    ("c_ry", "N.m.s/rad"),
-    ("c_rz", "N.m.s/rad"),
-];
-
 /// What each input does, in the order of [`Inputs::NAMES`].
 const INPUT_DESCRIPTIONS: [&str; 4] = [
     "reference position offset, added to the scenario's reference profile; held over each communication step",
@@ -85,8 +63,9 @@ fn fmi_unit(unit: &'static str) -> &'static str {
     }
 }
 
-/// Every variable of the unit for this model and scenario, in value-reference order.
+/// Every variable of the unit for this model and its scenario, in value-reference order.
 pub fn variables(model: &Model, scenario: &Scenario) -> Vec<Variable> {
+    let robot = model.robot();
     let mut list: Vec<Variable> = Vec::new();
     let mut push = |name: String, causality, start, unit, description: String, binding| {
         let value_reference = list.len() as u32;
@@ -100,61 +79,15 @@ pub fn variables(model: &Model, scenario: &Scenario) -> Vec<Variable> {
             binding,
         });
     };
-    if let Some(controller) = &model.controller {
-        for (index, (key, value, unit, what)) in [
-            ("k", controller.k, "N/m", "proportional gain"),
-            ("c", controller.c, "N.s/m", "derivative gain"),
-            ("k_i", controller.k_i, "N/(m.s)", "integral gain"),
-        ]
-        .into_iter()
-        .enumerate()
-        {
+    for parameter in Parameter::all(scenario, robot) {
+        if parameter.is_fmi_variable() {
             push(
-                format!("controller.{key}"),
+                parameter.short_name().to_string(),
                 Causality::Parameter,
-                Some(value),
-                unit,
-                format!("servo {what}"),
-                Binding::ControllerGain(index),
-            );
-        }
-    }
-    for friction in &model.frictions {
-        for ((name, value), unit) in LugreParams::NAMES
-            .iter()
-            .zip(friction.lugre.values())
-            .zip(LUGRE_UNITS)
-        {
-            push(
-                format!("{}.{name}", friction.name),
-                Causality::Parameter,
-                Some(value),
-                unit,
-                format!("LuGre {name} of {}", friction.name),
-                Binding::Element {
-                    element: friction.name.clone(),
-                    key: name,
-                },
-            );
-        }
-    }
-    for isolator in &model.isolators {
-        for (index, (key, unit)) in ISOLATOR_KEYS.iter().enumerate() {
-            let value = if index < 6 {
-                isolator.stiffness[index]
-            } else {
-                isolator.damping[index - 6]
-            };
-            push(
-                format!("{}.{key}", isolator.name),
-                Causality::Parameter,
-                Some(value),
-                unit,
-                format!("isolator {} {key}", isolator.name),
-                Binding::Element {
-                    element: isolator.name.clone(),
-                    key,
-                },
+                Some(parameter.read(scenario, robot)),
+                parameter.unit(),
+                parameter.description(robot),
+                Binding::Parameter(parameter),
             );
         }
     }

@@ -35,7 +35,7 @@
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use fistage_model::{EquilibriumKind, LoadError, Loaded, Override, RobotSpec, Scenario, assemble};
+use fistage_model::{EquilibriumKind, LoadError, Loaded, Parameter, RobotSpec, Scenario, assemble};
 use fistage_sim::{
     Engine, Excitation, NativeEngine, ScenarioExcitation, SimSettings, initial_state,
 };
@@ -143,15 +143,7 @@ fn default_threshold() -> f64 {
 }
 
 /// Parameter paths every model accepts, besides `overrides.<element>.<key>`.
-pub const PARAMETERS: [&str; 7] = [
-    "controller.k",
-    "controller.c",
-    "controller.k_i",
-    "platform.velocity",
-    "alpha",
-    "beta",
-    "spread.friction",
-];
+pub const PARAMETERS: [&str; 7] = fistage_model::parameter::GLOBAL_PATHS;
 
 impl SweepSpec {
     /// Reads the scenario's `[sweep]` table.
@@ -180,18 +172,18 @@ impl SweepSpec {
             if axis.spacing == Spacing::Log && (axis.from <= 0.0 || axis.to <= 0.0) {
                 return Err(scenario.error(&key, "log spacing needs from > 0 and to > 0"));
             }
-            if !PARAMETERS.contains(&axis.parameter.as_str())
-                && !axis.parameter.starts_with("overrides.")
-            {
+            if spec.axes[..k].iter().any(|a| a.parameter == axis.parameter) {
                 return Err(scenario.error(
                     format!("{key}.parameter"),
-                    format!(
-                        "unknown parameter \"{}\" (use {}, spread.<lugre key> or overrides.<element>.<key>)",
-                        axis.parameter,
-                        PARAMETERS.join(", ")
-                    ),
+                    format!("\"{}\" is swept twice", axis.parameter),
                 ));
             }
+        }
+        if !(spec.oscillation_threshold.is_finite() && spec.oscillation_threshold >= 0.0) {
+            return Err(scenario.error(
+                "sweep.oscillation_threshold",
+                format!("must be >= 0, got {}", spec.oscillation_threshold),
+            ));
         }
         if let Some(d) = spec.duration
             && !(d.is_finite() && d > 0.0)
@@ -199,6 +191,24 @@ impl SweepSpec {
             return Err(scenario.error("sweep.duration", format!("must be > 0, got {d}")));
         }
         Ok(spec)
+    }
+
+    /// Resolves every axis against the study and checks every grid value
+    /// against its parameter's rule, so that no point fails for a reason the
+    /// whole grid shares (an axis that names nothing, a negative gain).
+    pub fn check_against(&self, scenario: &Scenario, robot: &RobotSpec) -> Result<(), LoadError> {
+        for (k, axis) in self.axes.iter().enumerate() {
+            let parameter = Parameter::resolve(&axis.parameter, scenario, robot)?;
+            for value in [axis.from, axis.to] {
+                parameter.check(value).map_err(|message| {
+                    scenario.error(
+                        format!("sweep.axis[{k}] ({})", axis.parameter),
+                        format!("from and to: {message}"),
+                    )
+                })?;
+            }
+        }
+        Ok(())
     }
 
     /// Number of grid points.
@@ -244,95 +254,16 @@ pub struct PointResult {
     pub bistable: Option<bool>,
 }
 
-/// Applies one sweep parameter to a scenario and its (unmodified) robot.
+/// Applies one sweep parameter to a scenario and its (unmodified) robot,
+/// through the model's parameter table (the same paths and rules as scenario
+/// overrides and FMU parameters).
 pub fn apply_parameter(
     scenario: &mut Scenario,
     robot: &mut RobotSpec,
     parameter: &str,
     value: f64,
 ) -> Result<(), LoadError> {
-    match parameter {
-        "controller.k" | "controller.c" | "controller.k_i" => {
-            if scenario.controller.is_none() {
-                return Err(scenario_error(
-                    scenario,
-                    parameter,
-                    "the scenario has no [controller]",
-                ));
-            }
-            let Some(controller) = scenario.controller.as_mut() else {
-                return Ok(());
-            };
-            match parameter {
-                "controller.k" => controller.k = value,
-                "controller.c" => controller.c = value,
-                _ => controller.k_i = value,
-            }
-        }
-        "platform.velocity" => scenario.platform_velocity = value,
-        "alpha" => {
-            for isolator in &mut robot.isolators {
-                isolator.stiffness[0] *= value;
-                isolator.damping[0] *= value;
-            }
-        }
-        "beta" => {
-            for link in &mut robot.links {
-                if robot.frictions.iter().any(|f| f.link == link.name) {
-                    link.mass *= value;
-                    link.inertia *= value;
-                }
-            }
-        }
-        path if path.starts_with("spread.") => {
-            let key = &path["spread.".len()..];
-            let keys: Vec<&str> = if key == "friction" {
-                vec!["f_c", "f_s", "sigma0"]
-            } else {
-                vec![key]
-            };
-            let n = robot.frictions.len();
-            for (i, friction) in robot.frictions.iter_mut().enumerate() {
-                let weight = if n > 1 {
-                    1.0 - 2.0 * i as f64 / (n - 1) as f64
-                } else {
-                    0.0
-                };
-                for key in &keys {
-                    let Some(slot) = friction.lugre.get_mut(key) else {
-                        return Err(scenario_error(
-                            scenario,
-                            parameter,
-                            "unknown LuGre parameter",
-                        ));
-                    };
-                    *slot *= 1.0 + value * weight;
-                }
-            }
-        }
-        path => {
-            let Some((target, key)) = path
-                .strip_prefix("overrides.")
-                .and_then(|rest| rest.rsplit_once('.'))
-            else {
-                return Err(scenario_error(
-                    scenario,
-                    parameter,
-                    "unknown sweep parameter",
-                ));
-            };
-            scenario.overrides.push(Override {
-                target: target.to_string(),
-                key: key.to_string(),
-                value,
-            });
-        }
-    }
-    Ok(())
-}
-
-fn scenario_error(scenario: &Scenario, parameter: &str, message: &str) -> LoadError {
-    scenario.error(format!("sweep ({parameter})"), message)
+    Parameter::resolve(parameter, scenario, robot)?.write(scenario, robot, value)
 }
 
 /// The study at one grid point: the scenario with the point's parameters,

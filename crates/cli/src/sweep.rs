@@ -60,6 +60,7 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
     let loaded = fistage_model::load(&args.scenario)?;
     let spec = SweepSpec::from_scenario(&loaded.scenario)?;
     let robot_file = RobotSpec::from_file(&loaded.scenario.robot)?;
+    spec.check_against(&loaded.scenario, &robot_file)?;
     let out_dir = args.out.clone().unwrap_or_else(|| {
         let stem = args
             .scenario

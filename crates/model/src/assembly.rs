@@ -14,6 +14,7 @@ use crate::model::{
     Body, Controller, Frame, FrictionContact, Isolator, Joint, JointMotion, MassBlock, Model,
     PointAxis, SignalInfo, StateKind, StateLayout,
 };
+use crate::parameter;
 use crate::robot::{JointKind, PointAxisSpec, RobotSpec};
 use crate::scenario::Scenario;
 
@@ -53,90 +54,12 @@ pub fn assemble(
     Ok((robot, model))
 }
 
-const ISOLATOR_KEYS: [&str; 12] = [
-    "k_x", "k_y", "k_z", "k_rx", "k_ry", "k_rz", "c_x", "c_y", "c_z", "c_rx", "c_ry", "c_rz",
-];
-const POINT_KEYS: [&str; 3] = ["x", "y", "z"];
-
 /// Applies `[overrides.<name>]` tables to friction, isolator, actuator, sensor
-/// elements and links. Link `mass` scales the link's inertia with it (uniform density).
+/// elements and links through the parameter table. Link `mass` scales the
+/// link's inertia with it (uniform density).
 pub fn apply_overrides(robot: &mut RobotSpec, scenario: &Scenario) -> Result<(), LoadError> {
     for o in &scenario.overrides {
-        let key_path = format!("overrides.{}.{}", o.target, o.key);
-        let unknown_key = |allowed: &[&str]| {
-            scenario.error(
-                &key_path,
-                format!(
-                    "\"{}\" has no parameter \"{}\" (allowed: {})",
-                    o.target,
-                    o.key,
-                    allowed.join(", ")
-                ),
-            )
-        };
-        if let Some(friction) = robot.frictions.iter_mut().find(|f| f.name == o.target) {
-            if let Some(slot) = friction.lugre.get_mut(&o.key) {
-                *slot = o.value;
-            } else if let Some(axis) = POINT_KEYS.iter().position(|k| *k == o.key) {
-                friction.point[axis] = o.value;
-            } else {
-                let mut allowed = LugreParams::NAMES.to_vec();
-                allowed.extend(POINT_KEYS);
-                return Err(unknown_key(&allowed));
-            }
-        } else if let Some(isolator) = robot.isolators.iter_mut().find(|i| i.name == o.target) {
-            if let Some(axis) = POINT_KEYS.iter().position(|k| *k == o.key) {
-                isolator.origin.translation.vector[axis] = o.value;
-                continue;
-            }
-            let index = ISOLATOR_KEYS
-                .iter()
-                .position(|k| *k == o.key)
-                .ok_or_else(|| {
-                    let mut allowed = ISOLATOR_KEYS.to_vec();
-                    allowed.extend(POINT_KEYS);
-                    unknown_key(&allowed)
-                })?;
-            if o.value < 0.0 {
-                return Err(scenario.error(&key_path, format!("must be >= 0, got {}", o.value)));
-            }
-            if index < 6 {
-                isolator.stiffness[index] = o.value;
-            } else {
-                isolator.damping[index - 6] = o.value;
-            }
-        } else if let Some(element) = robot
-            .actuators
-            .iter_mut()
-            .chain(robot.sensors.iter_mut())
-            .find(|e| e.name == o.target)
-        {
-            let axis = POINT_KEYS
-                .iter()
-                .position(|k| *k == o.key)
-                .ok_or_else(|| unknown_key(&POINT_KEYS))?;
-            element.point[axis] = o.value;
-        } else if let Some(link) = robot.links.iter_mut().find(|l| l.name == o.target) {
-            if o.key != "mass" {
-                return Err(unknown_key(&["mass"]));
-            }
-            if o.value.is_nan() || o.value <= 0.0 {
-                return Err(scenario.error(&key_path, format!("must be > 0, got {}", o.value)));
-            }
-            if link.mass > 0.0 {
-                link.inertia *= o.value / link.mass;
-            }
-            link.mass = o.value;
-        } else {
-            return Err(scenario.error(
-                format!("overrides.{}", o.target),
-                format!(
-                    "no element or link named \"{}\" in {}",
-                    o.target,
-                    robot.file.display()
-                ),
-            ));
-        }
+        parameter::apply_override(scenario, robot, &o.target, &o.key, o.value)?;
     }
     // Check each friction element once all its overrides are in (f_c may rise
     // above the file's f_s as long as f_s rises too).
@@ -160,8 +83,6 @@ pub fn apply_overrides(robot: &mut RobotSpec, scenario: &Scenario) -> Result<(),
     }
     Ok(())
 }
-
-use crate::lugre::LugreParams;
 
 /// Where a link ended up: which body, and the link frame in the body frame.
 #[derive(Debug, Clone, Copy)]
@@ -612,6 +533,7 @@ impl<'a> Assembler<'a> {
             translational_map: None,
             rooted_plan: None,
             mass_blocks: Vec::new(),
+            robot: robot.clone(),
         };
         model.signals = signal_list(&model);
         check_mass_matrix(&mut model, &robot.file)?;

@@ -13,9 +13,11 @@ pub mod error;
 pub mod linearize;
 pub mod lugre;
 pub mod model;
+pub mod parameter;
 pub mod reference;
 pub mod robot;
 mod rooted;
+pub mod rule;
 pub mod scalar;
 pub mod scenario;
 mod translational;
@@ -26,13 +28,15 @@ pub use dynamics::{ElementValues, EvaluationPath, InputValues, Workspace};
 pub use equilibrium::{EquilibriumError, EquilibriumKind};
 pub use error::LoadError;
 pub use linearize::Tangent;
-pub use lugre::{InvalidLugreParameter, LugreParams};
+pub use lugre::{InvalidLugreParameter, LugreKey, LugreParams};
 pub use model::{
     Body, Controller, Frame, FrictionContact, Inputs, Isolator, Joint, JointMotion, Model,
     PointAxis, SignalInfo, StateKind, StateLayout,
 };
+pub use parameter::{Gain, Parameter};
 pub use reference::{Reference, ReferenceSample};
-pub use robot::{FISTAGE_NS, RobotSpec};
+pub use robot::{FISTAGE_NS, IsolatorKey, RobotSpec};
+pub use rule::{Rule, RuleViolation};
 pub use scalar::{Dual64, Scalar};
 pub use scenario::{
     ControllerSettings, Override, PayloadSettings, RapierSettings, Scenario, SolverSettings, Start,

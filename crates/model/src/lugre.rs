@@ -14,6 +14,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::rule::Rule;
 use crate::scalar::{Scalar, kink_abs};
 use thiserror::Error;
 
@@ -27,6 +28,16 @@ pub struct InvalidLugreParameter {
     pub value: f64,
     /// The requirement in words, e.g. `> 0` or `>= f_c (6.5)`.
     pub requirement: String,
+}
+
+impl InvalidLugreParameter {
+    fn new(name: &'static str, value: f64, rule: Rule) -> Self {
+        Self {
+            name,
+            value,
+            requirement: rule.requirement().to_string(),
+        }
+    }
 }
 
 /// The six LuGre parameters of one contact, SI units.
@@ -46,9 +57,103 @@ pub struct LugreParams {
     pub v_s: f64,
 }
 
+/// One LuGre parameter: its file name, unit, own validity rule and field.
+/// [`LugreParams::KEYS`] lists them; a new LuGre parameter is one entry there
+/// (and its field), and every reader, override, sweep and FMU variable follows.
+#[derive(Debug, Clone, Copy)]
+pub struct LugreKey {
+    /// Name in files and parameter paths (`sigma0`, `f_c`, ...).
+    pub name: &'static str,
+    /// SI unit, as FMI unit names write it.
+    pub unit: &'static str,
+    /// The rule the value must meet on its own (`f_s >= f_c` is checked jointly).
+    pub rule: Rule,
+    /// What the parameter is, in a few words.
+    pub description: &'static str,
+    get: fn(&LugreParams) -> f64,
+    slot: fn(&mut LugreParams) -> &mut f64,
+}
+
+impl LugreKey {
+    /// The value of this parameter in `params`.
+    pub fn get(&self, params: &LugreParams) -> f64 {
+        (self.get)(params)
+    }
+
+    /// Sets this parameter in `params` (no check: see [`LugreParams::validate`]).
+    pub fn set(&self, params: &mut LugreParams, value: f64) {
+        *(self.slot)(params) = value;
+    }
+}
+
 impl LugreParams {
-    /// Names of the parameters in file order.
-    pub const NAMES: [&'static str; 6] = ["sigma0", "sigma1", "sigma2", "f_c", "f_s", "v_s"];
+    /// The parameters in file order, with units and rules.
+    pub const KEYS: [LugreKey; 6] = [
+        LugreKey {
+            name: "sigma0",
+            unit: "N/m",
+            rule: Rule::Positive,
+            description: "bristle stiffness",
+            get: |p| p.sigma0,
+            slot: |p| &mut p.sigma0,
+        },
+        LugreKey {
+            name: "sigma1",
+            unit: "N.s/m",
+            rule: Rule::NonNegative,
+            description: "bristle damping",
+            get: |p| p.sigma1,
+            slot: |p| &mut p.sigma1,
+        },
+        LugreKey {
+            name: "sigma2",
+            unit: "N.s/m",
+            rule: Rule::NonNegative,
+            description: "viscous friction",
+            get: |p| p.sigma2,
+            slot: |p| &mut p.sigma2,
+        },
+        LugreKey {
+            name: "f_c",
+            unit: "N",
+            rule: Rule::Positive,
+            description: "Coulomb friction level",
+            get: |p| p.f_c,
+            slot: |p| &mut p.f_c,
+        },
+        LugreKey {
+            name: "f_s",
+            unit: "N",
+            rule: Rule::Positive,
+            description: "static (breakaway) friction level",
+            get: |p| p.f_s,
+            slot: |p| &mut p.f_s,
+        },
+        LugreKey {
+            name: "v_s",
+            unit: "m/s",
+            rule: Rule::Positive,
+            description: "Stribeck velocity",
+            get: |p| p.v_s,
+            slot: |p| &mut p.v_s,
+        },
+    ];
+
+    /// Names of the parameters in file order (those of [`Self::KEYS`]).
+    pub const NAMES: [&'static str; 6] = {
+        let mut names = [""; 6];
+        let mut i = 0;
+        while i < names.len() {
+            names[i] = Self::KEYS[i].name;
+            i += 1;
+        }
+        names
+    };
+
+    /// The key named `name`.
+    pub fn key(name: &str) -> Option<&'static LugreKey> {
+        Self::KEYS.iter().find(|k| k.name == name)
+    }
 
     /// The identified bearing of the source paper, Table 1.
     pub const fn paper_table1() -> Self {
@@ -62,66 +167,40 @@ impl LugreParams {
         }
     }
 
-    /// Checks sigma0 > 0, f_s >= f_c > 0, v_s > 0, sigma1 >= 0, sigma2 >= 0, all finite.
+    /// Checks every key's rule (sigma0 > 0, f_c > 0, v_s > 0, sigma1 >= 0,
+    /// sigma2 >= 0, all finite) and f_s >= f_c.
     pub fn validate(&self) -> Result<(), InvalidLugreParameter> {
-        let bad = |name, value, requirement: &str| InvalidLugreParameter {
-            name,
-            value,
-            requirement: requirement.to_string(),
-        };
-        for (name, value) in Self::NAMES.iter().zip(self.values()) {
+        for key in &Self::KEYS {
+            let value = key.get(self);
             if !value.is_finite() {
-                return Err(bad(name, value, "finite"));
+                return Err(InvalidLugreParameter::new(key.name, value, Rule::Finite));
             }
         }
-        if self.sigma0 <= 0.0 {
-            return Err(bad("sigma0", self.sigma0, "> 0"));
-        }
-        if self.sigma1 < 0.0 {
-            return Err(bad("sigma1", self.sigma1, ">= 0"));
-        }
-        if self.sigma2 < 0.0 {
-            return Err(bad("sigma2", self.sigma2, ">= 0"));
-        }
-        if self.f_c <= 0.0 {
-            return Err(bad("f_c", self.f_c, "> 0"));
-        }
-        if self.f_s < self.f_c {
-            return Err(InvalidLugreParameter {
-                name: "f_s",
-                value: self.f_s,
-                requirement: format!(">= f_c ({})", self.f_c),
-            });
-        }
-        if self.v_s <= 0.0 {
-            return Err(bad("v_s", self.v_s, "> 0"));
+        for key in &Self::KEYS {
+            let value = key.get(self);
+            if key.name == "f_s" {
+                if self.f_s < self.f_c {
+                    return Err(InvalidLugreParameter {
+                        name: "f_s",
+                        value: self.f_s,
+                        requirement: format!(">= f_c ({})", self.f_c),
+                    });
+                }
+            } else if !key.rule.admits(value) {
+                return Err(InvalidLugreParameter::new(key.name, value, key.rule));
+            }
         }
         Ok(())
     }
 
-    /// The parameters in the order of [`Self::NAMES`].
+    /// The parameters in the order of [`Self::KEYS`].
     pub fn values(&self) -> [f64; 6] {
-        [
-            self.sigma0,
-            self.sigma1,
-            self.sigma2,
-            self.f_c,
-            self.f_s,
-            self.v_s,
-        ]
+        Self::KEYS.map(|k| k.get(self))
     }
 
     /// Mutable access by file name, for overrides and parameter sweeps.
     pub fn get_mut(&mut self, name: &str) -> Option<&mut f64> {
-        match name {
-            "sigma0" => Some(&mut self.sigma0),
-            "sigma1" => Some(&mut self.sigma1),
-            "sigma2" => Some(&mut self.sigma2),
-            "f_c" => Some(&mut self.f_c),
-            "f_s" => Some(&mut self.f_s),
-            "v_s" => Some(&mut self.v_s),
-            _ => None,
-        }
+        Self::key(name).map(|k| (k.slot)(self))
     }
 
     /// Stribeck level `f_c + (f_s - f_c) exp(-(v/v_s)^2)`, N (always > 0).

@@ -335,9 +335,17 @@ pub struct Model {
     pub(crate) translational_map: Option<crate::translational::TranslationalMap>,
     /// Resolved geometry of a model whose bodies all hang from the world.
     pub(crate) rooted_plan: Option<crate::rooted::RootedPlan>,
+    /// The robot file after the scenario's overrides: what the parameter table reads.
+    pub(crate) robot: crate::robot::RobotSpec,
 }
 
 impl Model {
+    /// The robot description the model was built from, after the scenario's
+    /// overrides (the values [`crate::Parameter::read`] reads).
+    pub fn robot(&self) -> &crate::robot::RobotSpec {
+        &self.robot
+    }
+
     /// Number of states.
     pub fn n_states(&self) -> usize {
         self.layout.len()

@@ -25,6 +25,7 @@
 
 use crate::error::LoadError;
 use crate::lugre::LugreParams;
+use crate::rule::Rule;
 use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
@@ -92,6 +93,79 @@ pub struct IsolatorSpec {
     pub stiffness: [f64; 6],
     /// Damping along x, y, z (N s/m) and about x, y, z (N m s/rad).
     pub damping: [f64; 6],
+}
+
+/// One stiffness or damping of an isolator: its name in parameter paths
+/// (`k_x` .. `k_rz`, `c_x` .. `c_rz`), unit and place.
+#[derive(Debug, Clone, Copy)]
+pub struct IsolatorKey {
+    /// Name in parameter paths.
+    pub name: &'static str,
+    /// SI unit, as FMI unit names write it.
+    pub unit: &'static str,
+    /// Damping (true) or stiffness (false).
+    pub damping: bool,
+    /// Attach-frame direction: 0..3 translations x, y, z; 3..6 rotations about them.
+    pub direction: usize,
+}
+
+const fn isolator_key(name: &'static str, damping: bool, direction: usize) -> IsolatorKey {
+    let unit = match (damping, direction < 3) {
+        (false, true) => "N/m",
+        (false, false) => "N.m/rad",
+        (true, true) => "N.s/m",
+        (true, false) => "N.m.s/rad",
+    };
+    IsolatorKey {
+        name,
+        unit,
+        damping,
+        direction,
+    }
+}
+
+impl IsolatorSpec {
+    /// Every stiffness and damping, stiffnesses first, in file order.
+    pub const KEYS: [IsolatorKey; 12] = [
+        isolator_key("k_x", false, 0),
+        isolator_key("k_y", false, 1),
+        isolator_key("k_z", false, 2),
+        isolator_key("k_rx", false, 3),
+        isolator_key("k_ry", false, 4),
+        isolator_key("k_rz", false, 5),
+        isolator_key("c_x", true, 0),
+        isolator_key("c_y", true, 1),
+        isolator_key("c_z", true, 2),
+        isolator_key("c_rx", true, 3),
+        isolator_key("c_ry", true, 4),
+        isolator_key("c_rz", true, 5),
+    ];
+
+    /// What every stiffness and damping must satisfy.
+    pub const RULE: Rule = Rule::NonNegative;
+
+    /// The key named `name`.
+    pub fn key(name: &str) -> Option<&'static IsolatorKey> {
+        Self::KEYS.iter().find(|k| k.name == name)
+    }
+
+    /// The value of one stiffness or damping.
+    pub fn get(&self, key: &IsolatorKey) -> f64 {
+        if key.damping {
+            self.damping[key.direction]
+        } else {
+            self.stiffness[key.direction]
+        }
+    }
+
+    /// Sets one stiffness or damping (no check: see [`Self::RULE`]).
+    pub fn set(&mut self, key: &IsolatorKey, value: f64) {
+        if key.damping {
+            self.damping[key.direction] = value;
+        } else {
+            self.stiffness[key.direction] = value;
+        }
+    }
 }
 
 /// A LuGre friction contact between a link and its counter-surface (rail or platform).
@@ -549,8 +623,10 @@ impl ExtensionReader<'_> {
         let t = self.vector(node, element, "xyz")?.unwrap_or_default();
         let r = self.vector(node, element, "rpy")?.unwrap_or_default();
         let values = [t[0], t[1], t[2], r[0], r[1], r[2]];
-        if let Some(v) = values.iter().find(|v| **v < 0.0) {
-            return Err(self.error(element, format!("{what} must be >= 0, got {v}")));
+        for value in values {
+            IsolatorSpec::RULE
+                .check(value)
+                .map_err(|e| self.error(element, format!("{what} {e}")))?;
         }
         Ok(values)
     }
@@ -590,22 +666,15 @@ impl ExtensionReader<'_> {
             )
         })?;
         self.check_attributes(lugre_node, &element, &LugreParams::NAMES)?;
-        let mut values = [0.0; 6];
-        for (value, name) in values.iter_mut().zip(LugreParams::NAMES) {
+        let mut lugre = LugreParams::paper_table1();
+        for key in &LugreParams::KEYS {
+            let name = key.name;
             let text = self.required_attribute(lugre_node, &element, name)?;
-            *value = text.trim().parse().map_err(|_| {
+            let value = text.trim().parse().map_err(|_| {
                 self.error(&element, format!("<lugre {name}=\"{text}\">: not a number"))
             })?;
+            key.set(&mut lugre, value);
         }
-        let [sigma0, sigma1, sigma2, f_c, f_s, v_s] = values;
-        let lugre = LugreParams {
-            sigma0,
-            sigma1,
-            sigma2,
-            f_c,
-            f_s,
-            v_s,
-        };
         lugre
             .validate()
             .map_err(|e| self.error(&element, e.to_string()))?;

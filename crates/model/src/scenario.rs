@@ -32,6 +32,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use crate::error::LoadError;
+use crate::parameter::Gain;
 use crate::reference::Reference;
 
 /// The scenario file as written, before checks.
@@ -95,6 +96,26 @@ pub struct ControllerSettings {
     /// Integral gain, N/(m s).
     #[serde(default)]
     pub k_i: f64,
+}
+
+impl ControllerSettings {
+    /// One gain.
+    pub fn gain(&self, gain: Gain) -> f64 {
+        match gain {
+            Gain::K => self.k,
+            Gain::C => self.c,
+            Gain::KI => self.k_i,
+        }
+    }
+
+    /// One gain, to write (see [`crate::Parameter`] for the checked way).
+    pub fn gain_mut(&mut self, gain: Gain) -> &mut f64 {
+        match gain {
+            Gain::K => &mut self.k,
+            Gain::C => &mut self.c,
+            Gain::KI => &mut self.k_i,
+        }
+    }
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -356,9 +377,11 @@ impl Scenario {
         }
         checker.finite("platform.velocity", raw.platform.velocity)?;
         if let Some(controller) = &raw.controller {
-            checker.non_negative("controller.k", controller.k)?;
-            checker.non_negative("controller.c", controller.c)?;
-            checker.non_negative("controller.k_i", controller.k_i)?;
+            for gain in Gain::ALL {
+                Gain::RULE.check(controller.gain(gain)).map_err(|e| {
+                    checker.error(&format!("controller.{}", gain.key()), e.to_string())
+                })?;
+            }
         }
         let reference = checker.reference(raw.reference, base)?;
         checker.positive("solver.rtol", raw.solver.rtol)?;

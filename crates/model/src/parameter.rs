@@ -1,0 +1,632 @@
+//! The parameter table: every tunable quantity of a study is one entry, with
+//! its path, unit, validity rule, and how it is read from and written to the
+//! study (a [`Scenario`] and its [`RobotSpec`] as read from file). Scenario
+//! overrides, sweep axes, FMU parameters, tolerance-analysis draws and
+//! identify's override writer all go through it, so a value is checked by the
+//! same rule wherever it comes from.
+//!
+//! Paths:
+//!
+//! | path | unit | rule | what it sets |
+//! |---|---|---|---|
+//! | `controller.k`, `controller.c`, `controller.k_i` | N/m, N s/m, N/(m s) | >= 0 | servo gains |
+//! | `platform.velocity` | m/s | finite | counter-surface velocity |
+//! | `alpha` | 1 | > 0 | factor on every isolator's x stiffness and damping (paper Fig. 9) |
+//! | `beta` | 1 | > 0 | factor on the mass and inertia of every link carrying friction |
+//! | `spread.<lugre key>`, `spread.friction` | 1 | -1 < s < 1 | mismatch of the friction contacts |
+//! | `overrides.<friction>.<lugre key>` | SI | [`LugreParams::KEYS`] | one contact's LuGre parameter |
+//! | `overrides.<friction>.x` (`y`, `z`) | m | finite | contact point |
+//! | `overrides.<isolator>.k_x` .. `c_rz` | SI | >= 0 | [`IsolatorSpec::KEYS`] |
+//! | `overrides.<isolator>.x` (`y`, `z`) | m | finite | attach point |
+//! | `overrides.<actuator or sensor>.x` (`y`, `z`) | m | finite | point |
+//! | `overrides.<link>.mass` | kg | > 0 | link mass (inertia scales with it) |
+//!
+//! `alpha`, `beta` and `spread.*` act on the robot file's values and read as
+//! their neutral value (1, 1 and 0). `spread.<key>` gives contact i of n (file
+//! order) its value times `1 + s w_i`, weights running evenly from +1 to -1;
+//! `spread.friction` spreads `f_c`, `f_s` and `sigma0` together.
+//!
+//! ```
+//! use fistage_model::{Parameter, RobotSpec, Scenario};
+//! # let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/paper");
+//! let mut scenario = Scenario::from_file(&dir.join("fig05b_fi.toml"))?;
+//! let mut robot = RobotSpec::from_file(&scenario.robot)?;
+//! let gain = Parameter::resolve("controller.k", &scenario, &robot)?;
+//! assert_eq!(gain.unit(), "N/m");
+//! gain.write(&mut scenario, &mut robot, 1e5)?;
+//! assert_eq!(gain.read(&scenario, &robot), 1e5);
+//! // The loader's rule holds here too: a negative gain is refused.
+//! assert!(gain.write(&mut scenario, &mut robot, -1.0).is_err());
+//! # Ok::<(), fistage_model::LoadError>(())
+//! ```
+
+use std::fmt;
+
+use crate::error::LoadError;
+use crate::lugre::{InvalidLugreParameter, LugreKey, LugreParams};
+use crate::robot::{IsolatorKey, IsolatorSpec, RobotSpec};
+use crate::rule::Rule;
+use crate::scenario::Scenario;
+
+/// A servo gain.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Gain {
+    /// Proportional gain `k`, N/m.
+    K,
+    /// Derivative gain `c`, N s/m.
+    C,
+    /// Integral gain `k_i`, N/(m s).
+    KI,
+}
+
+impl Gain {
+    /// The three gains in path order.
+    pub const ALL: [Gain; 3] = [Gain::K, Gain::C, Gain::KI];
+
+    /// What the scenario reader and every writer require of a gain.
+    pub const RULE: Rule = Rule::NonNegative;
+
+    /// Key under `[controller]`.
+    pub fn key(self) -> &'static str {
+        match self {
+            Gain::K => "k",
+            Gain::C => "c",
+            Gain::KI => "k_i",
+        }
+    }
+
+    fn unit(self) -> &'static str {
+        match self {
+            Gain::K => "N/m",
+            Gain::C => "N.s/m",
+            Gain::KI => "N/(m.s)",
+        }
+    }
+
+    fn description(self) -> &'static str {
+        match self {
+            Gain::K => "servo proportional gain",
+            Gain::C => "servo derivative gain",
+            Gain::KI => "servo integral gain",
+        }
+    }
+}
+
+/// A coordinate of a point (`x`, `y`, `z`).
+const POINT_KEYS: [&str; 3] = ["x", "y", "z"];
+
+/// The kinds of element a path `overrides.<name>.<key>` can name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+enum Element {
+    Friction(usize),
+    Isolator(usize),
+    Actuator(usize),
+    Sensor(usize),
+}
+
+/// What a parameter acts on, resolved against one robot file.
+#[derive(Debug, Clone, Copy)]
+enum Target {
+    Gain(Gain),
+    PlatformVelocity,
+    Alpha,
+    Beta,
+    /// `spread.<key>`: the LuGre keys it spreads.
+    Spread(&'static [&'static str]),
+    Lugre(usize, &'static LugreKey),
+    Isolator(usize, &'static IsolatorKey),
+    Point(Element, usize),
+    LinkMass(usize),
+}
+
+const SPREAD_FRICTION: [&str; 3] = ["f_c", "f_s", "sigma0"];
+
+/// One entry of the parameter table, resolved against a study.
+#[derive(Debug, Clone)]
+pub struct Parameter {
+    path: String,
+    target: Target,
+}
+
+impl PartialEq for Parameter {
+    fn eq(&self, other: &Self) -> bool {
+        self.path == other.path
+    }
+}
+
+impl Eq for Parameter {}
+
+impl fmt::Display for Parameter {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.path)
+    }
+}
+
+impl Parameter {
+    /// Resolves `path` against a scenario and its robot file. The error names
+    /// the path and says what exists instead.
+    pub fn resolve(path: &str, scenario: &Scenario, robot: &RobotSpec) -> Result<Self, LoadError> {
+        let target = resolve_target(path, scenario, robot)?;
+        Ok(Self {
+            path: path.to_string(),
+            target,
+        })
+    }
+
+    /// Every parameter of the study, in table order: gains, platform
+    /// velocity, then element by element (frictions, isolators, actuators,
+    /// sensors, link masses), then the scale and spread parameters.
+    pub fn all(scenario: &Scenario, robot: &RobotSpec) -> Vec<Self> {
+        let mut list = Vec::new();
+        let mut push = |path: String, target| list.push(Self { path, target });
+        if scenario.controller.is_some() {
+            for gain in Gain::ALL {
+                push(format!("controller.{}", gain.key()), Target::Gain(gain));
+            }
+        }
+        push("platform.velocity".into(), Target::PlatformVelocity);
+        for (i, friction) in robot.frictions.iter().enumerate() {
+            for key in &LugreParams::KEYS {
+                let path = format!("overrides.{}.{}", friction.name, key.name);
+                push(path, Target::Lugre(i, key));
+            }
+            for (axis, name) in POINT_KEYS.iter().enumerate() {
+                let path = format!("overrides.{}.{name}", friction.name);
+                push(path, Target::Point(Element::Friction(i), axis));
+            }
+        }
+        for (i, isolator) in robot.isolators.iter().enumerate() {
+            for key in &IsolatorSpec::KEYS {
+                let path = format!("overrides.{}.{}", isolator.name, key.name);
+                push(path, Target::Isolator(i, key));
+            }
+            for (axis, name) in POINT_KEYS.iter().enumerate() {
+                let path = format!("overrides.{}.{name}", isolator.name);
+                push(path, Target::Point(Element::Isolator(i), axis));
+            }
+        }
+        let point_elements = (robot.actuators.iter().enumerate())
+            .map(|(i, a)| (Element::Actuator(i), &a.name))
+            .chain((robot.sensors.iter().enumerate()).map(|(i, s)| (Element::Sensor(i), &s.name)));
+        for (element, name) in point_elements {
+            for (axis, key) in POINT_KEYS.iter().enumerate() {
+                push(
+                    format!("overrides.{name}.{key}"),
+                    Target::Point(element, axis),
+                );
+            }
+        }
+        for (i, link) in robot.links.iter().enumerate() {
+            if link.mass > 0.0 {
+                push(format!("overrides.{}.mass", link.name), Target::LinkMass(i));
+            }
+        }
+        if !robot.isolators.is_empty() {
+            push("alpha".into(), Target::Alpha);
+        }
+        if !robot.frictions.is_empty() {
+            push("beta".into(), Target::Beta);
+        }
+        if robot.frictions.len() > 1 {
+            for key in &LugreParams::KEYS {
+                push(
+                    format!("spread.{}", key.name),
+                    Target::Spread(std::slice::from_ref(&key.name)),
+                );
+            }
+            push("spread.friction".into(), Target::Spread(&SPREAD_FRICTION));
+        }
+        list
+    }
+
+    /// The path, e.g. `overrides.bearing_friction.sigma0`.
+    pub fn path(&self) -> &str {
+        &self.path
+    }
+
+    /// The FMI variable name: the path without its `overrides.` prefix.
+    pub fn short_name(&self) -> &str {
+        self.path.strip_prefix("overrides.").unwrap_or(&self.path)
+    }
+
+    /// SI unit, as FMI unit names write it (`1` for factors).
+    pub fn unit(&self) -> &'static str {
+        match self.target {
+            Target::Gain(gain) => gain.unit(),
+            Target::PlatformVelocity => "m/s",
+            Target::Alpha | Target::Beta | Target::Spread(_) => "1",
+            Target::Lugre(_, key) => key.unit,
+            Target::Isolator(_, key) => key.unit,
+            Target::Point(..) => "m",
+            Target::LinkMass(_) => "kg",
+        }
+    }
+
+    /// The rule every value must meet.
+    pub fn rule(&self) -> Rule {
+        match self.target {
+            Target::Gain(_) => Gain::RULE,
+            Target::PlatformVelocity | Target::Point(..) => Rule::Finite,
+            Target::Alpha | Target::Beta | Target::LinkMass(_) => Rule::Positive,
+            Target::Spread(_) => Rule::Spread,
+            Target::Lugre(_, key) => key.rule,
+            Target::Isolator(..) => IsolatorSpec::RULE,
+        }
+    }
+
+    /// Whether the value is relative to the robot file (`alpha`, `beta`,
+    /// `spread.*`) rather than a value in its own right.
+    pub fn is_relative(&self) -> bool {
+        matches!(
+            self.target,
+            Target::Alpha | Target::Beta | Target::Spread(_)
+        )
+    }
+
+    /// Whether an exported FMU offers this parameter as a variable (servo
+    /// gains, LuGre parameters and isolator stiffness and damping).
+    pub fn is_fmi_variable(&self) -> bool {
+        matches!(
+            self.target,
+            Target::Gain(_) | Target::Lugre(..) | Target::Isolator(..)
+        )
+    }
+
+    /// A few words on what it is.
+    pub fn description(&self, robot: &RobotSpec) -> String {
+        match self.target {
+            Target::Gain(gain) => gain.description().to_string(),
+            Target::PlatformVelocity => "counter-surface velocity along every contact axis".into(),
+            Target::Alpha => "factor on every isolator's x stiffness and damping".into(),
+            Target::Beta => "factor on the mass of every link that carries friction".into(),
+            Target::Spread(keys) => format!(
+                "relative spread of {} over the friction contacts",
+                keys.join(", ")
+            ),
+            Target::Lugre(i, key) => format!(
+                "LuGre {} of {} ({})",
+                key.name, robot.frictions[i].name, key.description
+            ),
+            Target::Isolator(i, key) => {
+                format!("isolator {} {}", robot.isolators[i].name, key.name)
+            }
+            Target::Point(element, axis) => format!(
+                "{} coordinate of the point of {}",
+                POINT_KEYS[axis],
+                element_name(robot, element)
+            ),
+            Target::LinkMass(i) => format!("mass of link {}", robot.links[i].name),
+        }
+    }
+
+    /// The value in the study (the neutral 1 or 0 for relative parameters).
+    pub fn read(&self, scenario: &Scenario, robot: &RobotSpec) -> f64 {
+        match self.target {
+            Target::Gain(gain) => scenario.controller.as_ref().map_or(0.0, |c| c.gain(gain)),
+            Target::PlatformVelocity => scenario.platform_velocity,
+            Target::Alpha | Target::Beta => 1.0,
+            Target::Spread(_) => 0.0,
+            Target::Lugre(i, key) => key.get(&robot.frictions[i].lugre),
+            Target::Isolator(i, key) => robot.isolators[i].get(key),
+            Target::Point(element, axis) => match element {
+                Element::Friction(i) => robot.frictions[i].point[axis],
+                Element::Isolator(i) => robot.isolators[i].origin.translation.vector[axis],
+                Element::Actuator(i) => robot.actuators[i].point[axis],
+                Element::Sensor(i) => robot.sensors[i].point[axis],
+            },
+            Target::LinkMass(i) => robot.links[i].mass,
+        }
+    }
+
+    /// Writes `value` into the study after checking the parameter's rule. The
+    /// LuGre rule that joins two keys (`f_s >= f_c`) is checked when the model
+    /// is assembled, once every override is in.
+    pub fn write(
+        &self,
+        scenario: &mut Scenario,
+        robot: &mut RobotSpec,
+        value: f64,
+    ) -> Result<(), LoadError> {
+        self.check(value)
+            .map_err(|m| scenario.error(&self.path, m))?;
+        match self.target {
+            Target::Gain(gain) => {
+                if let Some(c) = scenario.controller.as_mut() {
+                    *c.gain_mut(gain) = value;
+                }
+            }
+            Target::PlatformVelocity => scenario.platform_velocity = value,
+            _ => self.write_robot(robot, value),
+        }
+        Ok(())
+    }
+
+    /// Writes a robot-file parameter (every target but the scenario's gains
+    /// and platform velocity) without checking its rule.
+    fn write_robot(&self, robot: &mut RobotSpec, value: f64) {
+        match self.target {
+            Target::Gain(_) | Target::PlatformVelocity => {}
+            Target::Alpha => {
+                for isolator in &mut robot.isolators {
+                    isolator.stiffness[0] *= value;
+                    isolator.damping[0] *= value;
+                }
+            }
+            Target::Beta => {
+                for link in &mut robot.links {
+                    if robot.frictions.iter().any(|f| f.link == link.name) {
+                        link.mass *= value;
+                        link.inertia *= value;
+                    }
+                }
+            }
+            Target::Spread(keys) => {
+                let n = robot.frictions.len();
+                for (i, friction) in robot.frictions.iter_mut().enumerate() {
+                    let weight = 1.0 - 2.0 * i as f64 / (n - 1) as f64;
+                    for key in keys.iter().filter_map(|k| LugreParams::key(k)) {
+                        let spread = key.get(&friction.lugre) * (1.0 + value * weight);
+                        key.set(&mut friction.lugre, spread);
+                    }
+                }
+            }
+            Target::Lugre(i, key) => key.set(&mut robot.frictions[i].lugre, value),
+            Target::Isolator(i, key) => robot.isolators[i].set(key, value),
+            Target::Point(element, axis) => match element {
+                Element::Friction(i) => robot.frictions[i].point[axis] = value,
+                Element::Isolator(i) => robot.isolators[i].origin.translation.vector[axis] = value,
+                Element::Actuator(i) => robot.actuators[i].point[axis] = value,
+                Element::Sensor(i) => robot.sensors[i].point[axis] = value,
+            },
+            Target::LinkMass(i) => {
+                let link = &mut robot.links[i];
+                if link.mass > 0.0 {
+                    link.inertia *= value / link.mass;
+                }
+                link.mass = value;
+            }
+        }
+    }
+
+    /// Checks a value against the rule; the message is the one every reader gives.
+    pub fn check(&self, value: f64) -> Result<(), String> {
+        let rule = self.rule();
+        match self.target {
+            Target::Lugre(_, key) if !rule.admits(value) => {
+                let rule = if value.is_finite() {
+                    rule
+                } else {
+                    Rule::Finite
+                };
+                Err(InvalidLugreParameter {
+                    name: key.name,
+                    value,
+                    requirement: rule.requirement().to_string(),
+                }
+                .to_string())
+            }
+            _ => rule.check(value).map_err(|e| e.to_string()),
+        }
+    }
+}
+
+fn element_name(robot: &RobotSpec, element: Element) -> &str {
+    match element {
+        Element::Friction(i) => &robot.frictions[i].name,
+        Element::Isolator(i) => &robot.isolators[i].name,
+        Element::Actuator(i) => &robot.actuators[i].name,
+        Element::Sensor(i) => &robot.sensors[i].name,
+    }
+}
+
+/// Paths every study accepts besides `overrides.<element>.<key>`.
+pub const GLOBAL_PATHS: [&str; 7] = [
+    "controller.k",
+    "controller.c",
+    "controller.k_i",
+    "platform.velocity",
+    "alpha",
+    "beta",
+    "spread.friction",
+];
+
+fn resolve_target(path: &str, scenario: &Scenario, robot: &RobotSpec) -> Result<Target, LoadError> {
+    let error = |message: String| scenario.error(path, message);
+    if let Some(key) = path.strip_prefix("controller.") {
+        let gain = Gain::ALL
+            .into_iter()
+            .find(|g| g.key() == key)
+            .ok_or_else(|| error("unknown servo gain (use k, c or k_i)".into()))?;
+        if scenario.controller.is_none() {
+            return Err(error("the scenario has no [controller]".into()));
+        }
+        return Ok(Target::Gain(gain));
+    }
+    if let Some(key) = path.strip_prefix("spread.") {
+        let keys: &'static [&'static str] = if key == "friction" {
+            &SPREAD_FRICTION
+        } else {
+            let key = LugreParams::key(key).ok_or_else(|| {
+                error(format!(
+                    "unknown LuGre parameter \"{key}\" (use friction or one of {})",
+                    LugreParams::NAMES.join(", ")
+                ))
+            })?;
+            std::slice::from_ref(&key.name)
+        };
+        if robot.frictions.len() < 2 {
+            return Err(error(format!(
+                "spreads mismatch friction contacts, and {} has {}",
+                robot.file.display(),
+                robot.frictions.len()
+            )));
+        }
+        return Ok(Target::Spread(keys));
+    }
+    match path {
+        "platform.velocity" => return Ok(Target::PlatformVelocity),
+        "alpha" if robot.isolators.is_empty() => {
+            return Err(error(format!(
+                "scales isolators, and {} has none",
+                robot.file.display()
+            )));
+        }
+        "alpha" => return Ok(Target::Alpha),
+        "beta" if robot.frictions.is_empty() => {
+            return Err(error(format!(
+                "scales the links that carry friction, and {} has none",
+                robot.file.display()
+            )));
+        }
+        "beta" => return Ok(Target::Beta),
+        _ => {}
+    }
+    let Some((name, key)) = path
+        .strip_prefix("overrides.")
+        .and_then(|rest| rest.rsplit_once('.'))
+    else {
+        return Err(error(format!(
+            "unknown parameter (use {}, spread.<lugre key> or overrides.<element>.<key>)",
+            GLOBAL_PATHS.join(", ")
+        )));
+    };
+    element_target(name, key, robot).map_err(|(at, message)| scenario.error(at, message))
+}
+
+/// Applies one `[overrides.<name>] key = value` of `scenario` to `robot`.
+pub(crate) fn apply_override(
+    scenario: &Scenario,
+    robot: &mut RobotSpec,
+    name: &str,
+    key: &str,
+    value: f64,
+) -> Result<(), LoadError> {
+    let parameter = Parameter {
+        path: format!("overrides.{name}.{key}"),
+        target: element_target(name, key, robot)
+            .map_err(|(at, message)| scenario.error(at, message))?,
+    };
+    parameter
+        .check(value)
+        .map_err(|m| scenario.error(&parameter.path, m))?;
+    parameter.write_robot(robot, value);
+    Ok(())
+}
+
+/// The target of `overrides.<name>.<key>`; an error says at which key path.
+fn element_target(name: &str, key: &str, robot: &RobotSpec) -> Result<Target, (String, String)> {
+    let unknown_key = |allowed: Vec<&str>| {
+        (
+            format!("overrides.{name}.{key}"),
+            format!(
+                "\"{name}\" has no parameter \"{key}\" (allowed: {})",
+                allowed.join(", ")
+            ),
+        )
+    };
+    let point = POINT_KEYS.iter().position(|k| *k == key);
+    if let Some(i) = robot.frictions.iter().position(|f| f.name == name) {
+        if let Some(lugre) = LugreParams::key(key) {
+            return Ok(Target::Lugre(i, lugre));
+        }
+        return match point {
+            Some(axis) => Ok(Target::Point(Element::Friction(i), axis)),
+            None => Err(unknown_key(
+                LugreParams::NAMES.into_iter().chain(POINT_KEYS).collect(),
+            )),
+        };
+    }
+    if let Some(i) = robot.isolators.iter().position(|s| s.name == name) {
+        if let Some(axis) = point {
+            return Ok(Target::Point(Element::Isolator(i), axis));
+        }
+        return match IsolatorSpec::key(key) {
+            Some(k) => Ok(Target::Isolator(i, k)),
+            None => Err(unknown_key(
+                (IsolatorSpec::KEYS.iter().map(|k| k.name))
+                    .chain(POINT_KEYS)
+                    .collect(),
+            )),
+        };
+    }
+    let point_element = (robot.actuators.iter().position(|a| a.name == name))
+        .map(Element::Actuator)
+        .or_else(|| (robot.sensors.iter().position(|s| s.name == name)).map(Element::Sensor));
+    if let Some(element) = point_element {
+        return match point {
+            Some(axis) => Ok(Target::Point(element, axis)),
+            None => Err(unknown_key(POINT_KEYS.to_vec())),
+        };
+    }
+    if let Some(i) = robot.links.iter().position(|l| l.name == name) {
+        return match key {
+            "mass" => Ok(Target::LinkMass(i)),
+            _ => Err(unknown_key(vec!["mass"])),
+        };
+    }
+    Err((
+        format!("overrides.{name}"),
+        format!(
+            "no element or link named \"{name}\" in {}",
+            robot.file.display()
+        ),
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fig05b() -> (Scenario, RobotSpec) {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/paper");
+        let scenario = Scenario::from_file(&dir.join("fig05b_fi.toml")).expect("scenario");
+        let robot = RobotSpec::from_file(&scenario.robot).expect("robot");
+        (scenario, robot)
+    }
+
+    /// Every entry reads back what was written, and refuses what its rule refuses.
+    #[test]
+    fn every_entry_round_trips_and_checks_its_rule() {
+        let (scenario, robot) = fig05b();
+        let all = Parameter::all(&scenario, &robot);
+        assert!(all.len() > 20, "{} entries", all.len());
+        for parameter in &all {
+            let again = Parameter::resolve(parameter.path(), &scenario, &robot).expect("resolves");
+            assert_eq!(&again, parameter);
+            let (mut s, mut r) = (scenario.clone(), robot.clone());
+            let value = if parameter.rule() == Rule::Spread {
+                0.25
+            } else {
+                parameter.read(&s, &r).abs() * 1.5 + 0.5
+            };
+            parameter.write(&mut s, &mut r, value).expect("valid value");
+            if !parameter.is_relative() {
+                assert_eq!(parameter.read(&s, &r), value, "{parameter}");
+            }
+            let refused = match parameter.rule() {
+                Rule::Finite => f64::NAN,
+                Rule::Spread => 1.0,
+                _ => -1.0,
+            };
+            assert!(
+                parameter.write(&mut s, &mut r, refused).is_err(),
+                "{parameter}"
+            );
+        }
+    }
+
+    #[test]
+    fn unknown_paths_name_what_exists() {
+        let (scenario, robot) = fig05b();
+        let message = |path: &str| {
+            Parameter::resolve(path, &scenario, &robot)
+                .unwrap_err()
+                .to_string()
+        };
+        assert!(message("overrides.nope.k_x").contains("no element or link named \"nope\""));
+        assert!(message("overrides.bearing_friction.k_x").contains("allowed: sigma0"));
+        assert!(message("spread.friction").contains("has 1"));
+        assert!(message("controller.q").contains("unknown servo gain"));
+        assert!(message("gamma").contains("unknown parameter"));
+    }
+}
