@@ -18,7 +18,6 @@ pub mod package;
 mod state;
 pub mod types;
 pub mod variables;
-mod zip;
 
 pub use instance::{CAPABILITIES, CallError, Instance, Phase};
 pub use logger::LOG_CATEGORIES;

@@ -4,14 +4,20 @@
 //! a reference CSV when the scenario uses one. The description is generated
 //! from the packaged resources themselves, so the GUID an instance computes
 //! at fmi2Instantiate is the one in the archive.
+//!
+//! Entries are deflate-compressed with a fixed time stamp (archives do not
+//! depend on when they were built), and the library is packaged without its
+//! debug information: the system's `strip --strip-debug` (binutils, which
+//! the Rust toolchain's linker brings) writes a copy; the code is untouched.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::process::Command;
 
 use thiserror::Error;
 
 use crate::instance::{CAPABILITIES, Instance};
 use crate::model_description::{MODEL_IDENTIFIER, model_description};
-use crate::zip::ZipWriter;
 
 /// The scenario's name inside `resources/`.
 pub const SCENARIO_FILE: &str = "scenario.toml";
@@ -47,6 +53,17 @@ pub enum PackageError {
     /// The packaged resources do not load as an instance.
     #[error("the packaged resources do not load: {0}")]
     Resources(String),
+    /// The archive could not be written.
+    #[error("writing the FMU archive: {0}")]
+    Archive(String),
+    /// The library named is not one this FMU can carry.
+    #[error("{file}: {reason}")]
+    Library {
+        /// The library file.
+        file: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
 }
 
 fn read(file: &Path) -> Result<Vec<u8>, PackageError> {
@@ -135,17 +152,100 @@ pub fn build_fmu(scenario_path: &Path, library: &Path) -> Result<Vec<u8>, Packag
     let loaded = fistage_model::load(&scratch.0.join(SCENARIO_FILE))?;
     let description = model_description(&loaded.model, &loaded.scenario, CAPABILITIES);
     debug_assert!(description.contains(instance.guid()));
-    let library_bytes = read(library)?;
-    let mut zip = ZipWriter::default();
-    zip.add("modelDescription.xml", description.as_bytes());
-    zip.add(
-        &format!("binaries/linux64/{MODEL_IDENTIFIER}.so"),
-        &library_bytes,
-    );
+    let library_bytes = library_without_debug_info(library, &scratch.0)?;
+    let mut entries: Vec<(String, &[u8])> = vec![
+        ("modelDescription.xml".into(), description.as_bytes()),
+        (
+            format!("binaries/linux64/{MODEL_IDENTIFIER}.so"),
+            &library_bytes,
+        ),
+    ];
     for (name, bytes) in &resources {
-        zip.add(&format!("resources/{name}"), bytes);
+        entries.push((format!("resources/{name}"), bytes));
     }
-    Ok(zip.finish())
+    deflated_archive(&entries)
+}
+
+/// A ZIP archive of the entries, deflate-compressed, time-stamped 1980-01-01.
+fn deflated_archive(entries: &[(String, &[u8])]) -> Result<Vec<u8>, PackageError> {
+    let archive_error = |e: &dyn std::fmt::Display| PackageError::Archive(e.to_string());
+    let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    let options = zip::write::SimpleFileOptions::default()
+        .compression_method(zip::CompressionMethod::Deflated)
+        .compression_level(Some(9))
+        .last_modified_time(zip::DateTime::default())
+        .unix_permissions(0o644);
+    for (name, bytes) in entries {
+        zip.start_file(name.as_str(), options)
+            .map_err(|e| archive_error(&e))?;
+        zip.write_all(bytes).map_err(|e| archive_error(&e))?;
+    }
+    let cursor = zip.finish().map_err(|e| archive_error(&e))?;
+    Ok(cursor.into_inner())
+}
+
+/// The library's bytes without debug sections. It must be an ELF shared
+/// object exporting the FMI functions; `strip --strip-debug` writes the
+/// copy, and a library with no debug sections (or a system without `strip`)
+/// is packaged as it is.
+fn library_without_debug_info(library: &Path, scratch: &Path) -> Result<Vec<u8>, PackageError> {
+    let bytes = read(library)?;
+    check_fmi_library(&bytes).map_err(|reason| PackageError::Library {
+        file: library.to_path_buf(),
+        reason,
+    })?;
+    let stripped = scratch.join("library.so");
+    let status = Command::new("strip")
+        .arg("--strip-debug")
+        .arg("-o")
+        .arg(&stripped)
+        .arg(library)
+        .status();
+    match status {
+        Ok(status) if status.success() => read(&stripped),
+        _ => Ok(bytes),
+    }
+}
+
+/// The FMI functions every packaged library must export.
+const REQUIRED_EXPORTS: [&str; 4] = [
+    "fmi2Instantiate",
+    "fmi2DoStep",
+    "fmi2GetReal",
+    "fmi2GetTypesPlatform",
+];
+
+/// An ELF shared object (not an executable) whose dynamic symbols include
+/// the FMI entry points.
+fn check_fmi_library(bytes: &[u8]) -> Result<(), String> {
+    use object::read::elf::{ElfFile64, ProgramHeader};
+    use object::{Object, ObjectKind};
+    let file = ElfFile64::<object::Endianness>::parse(bytes)
+        .map_err(|_| "not an ELF shared library (64-bit)".to_string())?;
+    let endian = file.endian();
+    let interpreter = file
+        .elf_program_headers()
+        .iter()
+        .any(|h| h.p_type(endian) == object::elf::PT_INTERP);
+    if file.kind() != ObjectKind::Dynamic || interpreter {
+        return Err("an ELF file, but not a shared library".into());
+    }
+    let exports = file
+        .exports()
+        .map_err(|e| format!("unreadable dynamic symbols: {e}"))?
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| format!("unreadable dynamic symbols: {e}"))?;
+    for symbol in REQUIRED_EXPORTS {
+        if !exports
+            .iter()
+            .any(|e| e.name() == object::NameOrOrdinal::Name(symbol.as_bytes()))
+        {
+            return Err(format!(
+                "does not export {symbol}: not a fistage FMI library"
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Where the shared library is looked for when none is named: beside the
