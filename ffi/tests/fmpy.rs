@@ -77,6 +77,9 @@ fn simulate_and_compare(scenario: &str, name: &str, stop: f64, outputs: &[&str],
 
 #[test]
 fn fig05b_fi_validates_and_simulates_like_fistage_run() {
+    if !support::fmpy_available("fig05b_fi_validates_and_simulates_like_fistage_run") {
+        return;
+    }
     simulate_and_compare(
         "scenarios/paper/fig05b_fi.toml",
         "fig05b_fi",
@@ -93,6 +96,9 @@ fn fig05b_fi_validates_and_simulates_like_fistage_run() {
 
 #[test]
 fn six_dof_stage_validates_and_simulates_like_fistage_run() {
+    if !support::fmpy_available("six_dof_stage_validates_and_simulates_like_fistage_run") {
+        return;
+    }
     simulate_and_compare(
         "scenarios/coupling/friction20_traverse.toml",
         "friction20_traverse",
@@ -114,6 +120,9 @@ fn six_dof_stage_validates_and_simulates_like_fistage_run() {
 /// servo must shrink with the communication step.
 #[test]
 fn external_controller_converges_to_the_internal_one() {
+    if !support::fmpy_available("external_controller_converges_to_the_internal_one") {
+        return;
+    }
     let scenario = "scenarios/paper/fig05b_fi.toml";
     let folder = support::scratch("external_controller");
     let fmu = support::fmu(scenario, &folder);
@@ -160,6 +169,9 @@ fn external_controller_converges_to_the_internal_one() {
 
 #[test]
 fn rollback_repeats_the_trajectory_bit_for_bit() {
+    if !support::fmpy_available("rollback_repeats_the_trajectory_bit_for_bit") {
+        return;
+    }
     for (scenario, name) in [
         ("scenarios/paper/fig05b_fi.toml", "rollback_1dof"),
         (
@@ -188,6 +200,9 @@ fn rollback_repeats_the_trajectory_bit_for_bit() {
 
 #[test]
 fn directional_derivatives_equal_central_differences() {
+    if !support::fmpy_available("directional_derivatives_equal_central_differences") {
+        return;
+    }
     let folder = support::scratch("derivatives");
     let fmu = support::fmu("scenarios/paper/fig05b_fi.toml", &folder);
     let report: serde_json::Value = serde_json::from_str(&support::run_python(
@@ -221,6 +236,9 @@ fn directional_derivatives_equal_central_differences() {
 
 #[test]
 fn fmutool_check_finds_nothing() {
+    if !support::fmpy_available("fmutool_check_finds_nothing") {
+        return;
+    }
     let folder = support::scratch("fmutool");
     for scenario in [
         "scenarios/paper/fig05b_fi.toml",

@@ -52,6 +52,9 @@ fn run_in_fmu_runner(fmu: &std::path::Path, outputs: &[&str], stop: f64) -> Vec<
 
 #[test]
 fn fmu_runner_and_fmpy_agree() {
+    if !support::fmpy_available("fmu_runner_and_fmpy_agree") {
+        return;
+    }
     for (scenario, stop, outputs) in [
         (
             "scenarios/paper/fig05b_fi.toml",

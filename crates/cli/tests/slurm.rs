@@ -1,9 +1,13 @@
 //! A sharded sweep run as a real Slurm job array on a single-node cluster
-//! (`tests/slurm/sweep_array.sh`, which installs Debian's slurm and munge
-//! when they are missing): the merged shards equal the unsharded run byte for byte.
+//! (`tests/slurm/sweep_array.sh`): the merged shards equal the unsharded run
+//! byte for byte. The script installs nothing; without Slurm and munge the
+//! test says SKIPPED, unless `.ci/run` requires it (`FISTAGE_SYSTEM_TESTS=required`).
 
 use std::path::Path;
 use std::process::Command;
+
+/// The script's exit status when Slurm or munge is missing.
+const MISSING_TOOLS: i32 = 77;
 
 #[test]
 fn sweep_shards_run_as_a_slurm_job_array_merge_to_the_unsharded_table() {
@@ -15,6 +19,15 @@ fn sweep_shards_run_as_a_slurm_job_array_merge_to_the_unsharded_table() {
         .expect("bash runs");
     let stdout = String::from_utf8_lossy(&output.stdout);
     let stderr = String::from_utf8_lossy(&output.stderr);
+    if output.status.code() == Some(MISSING_TOOLS) {
+        let required = std::env::var("FISTAGE_SYSTEM_TESTS").is_ok_and(|v| v == "required");
+        assert!(!required, "Slurm is required here: {stdout}");
+        println!(
+            "SKIPPED sweep_shards_run_as_a_slurm_job_array: {}",
+            stdout.trim()
+        );
+        return;
+    }
     assert!(output.status.success(), "{stdout}\n{stderr}");
     assert!(
         stdout.contains("merged points.csv equals the unsharded run"),

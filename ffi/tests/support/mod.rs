@@ -26,27 +26,39 @@ pub fn library() -> PathBuf {
         .expect("libfistage_fmi.so is built beside the tests")
 }
 
+/// Whether `.ci/run` asked for every system-dependent test to run
+/// (`FISTAGE_SYSTEM_TESTS=required`): then a missing tool fails the test.
+pub fn system_tests_required() -> bool {
+    std::env::var("FISTAGE_SYSTEM_TESTS").is_ok_and(|v| v == "required")
+}
+
 /// The python of the environment with FMPy: `FISTAGE_PYTHON` if set (as
-/// `.ci/run` sets it), else a virtual environment under `target/` made on first use.
+/// `.ci/run` sets it), else the environment `.ci/run` makes under `target/`.
+/// Tests never make it themselves.
+fn find_python() -> Option<PathBuf> {
+    if let Some(python) = std::env::var_os("FISTAGE_PYTHON") {
+        return Some(PathBuf::from(python));
+    }
+    let venv = root().join("target/fmi-venv/bin/python");
+    venv.is_file().then_some(venv)
+}
+
+/// Whether a test that needs FMPy can run. Without the environment it says
+/// SKIPPED and why, unless `.ci/run` requires it, when the test fails.
+pub fn fmpy_available(test: &str) -> bool {
+    if find_python().is_some() {
+        return true;
+    }
+    let why = "no FMPy environment (set FISTAGE_PYTHON, or run `bash ffi/tests/python/env.sh target/fmi-venv` as .ci/run does)";
+    assert!(!system_tests_required(), "{test}: {why}");
+    println!("SKIPPED {test}: {why}");
+    false
+}
+
+/// The python of the FMPy environment (see [`fmpy_available`]).
 pub fn python() -> &'static Path {
     static PYTHON: OnceLock<PathBuf> = OnceLock::new();
-    PYTHON.get_or_init(|| {
-        if let Some(python) = std::env::var_os("FISTAGE_PYTHON") {
-            return PathBuf::from(python);
-        }
-        let venv = root().join("target/fmi-venv");
-        let output = Command::new("bash")
-            .arg(root().join("ffi/tests/python/env.sh"))
-            .arg(&venv)
-            .output()
-            .expect("run ffi/tests/python/env.sh");
-        assert!(
-            output.status.success(),
-            "making the FMPy environment failed:\n{}",
-            String::from_utf8_lossy(&output.stderr)
-        );
-        PathBuf::from(String::from_utf8_lossy(&output.stdout).trim())
-    })
+    PYTHON.get_or_init(|| find_python().expect("the FMPy environment (checked by fmpy_available)"))
 }
 
 /// A fresh scratch folder under `target/fmi-tests/<name>`.
