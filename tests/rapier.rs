@@ -13,7 +13,7 @@ use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 fn with_engine(loaded: &Loaded, engine: &str, dt: Option<f64>) -> RunOutput {
     let mut loaded = loaded.clone();
-    loaded.scenario.solver.engine = engine.into();
+    loaded.scenario.solver.engine = engine.parse().expect("engine name");
     loaded.scenario.rapier.dt = dt;
     run_scenario(&loaded, &mut |_| {}).expect("run")
 }
@@ -146,7 +146,7 @@ fn hard_stop_holds_the_table_where_native_runs_past() {
     let stats = fistage_tests::stats(&crashed, "table_x.q");
     let mut free = loaded.clone();
     free.scenario.rapier.stops.clear();
-    free.scenario.solver.engine = "native".into();
+    free.scenario.solver.engine = fistage_model::EngineKind::Native;
     let free_stats = fistage_tests::stats(&run(&free), "table_x.q");
     let position = crashed.signals.column("table_x.q").expect("signal");
     let peak = position.iter().cloned().fold(f64::MIN, f64::max);
@@ -167,7 +167,7 @@ fn hard_stop_holds_the_table_where_native_runs_past() {
     assert!(peak < upper + 5e-5, "peak {peak:e}");
     // The native engine refuses a scenario with colliders instead of ignoring them.
     let mut native = loaded.clone();
-    native.scenario.solver.engine = "native".into();
+    native.scenario.solver.engine = fistage_model::EngineKind::Native;
     let error = run_scenario(&native, &mut |_| {}).expect_err("native refuses colliders");
     assert!(error.to_string().contains("rapier.stop"), "{error}");
 }

@@ -9,7 +9,7 @@ use fistage_tests::{load, stats};
 
 fn with(loaded: &Loaded, engine: &str, rtol: f64) -> RunOutput {
     let mut loaded = loaded.clone();
-    loaded.scenario.solver.engine = engine.into();
+    loaded.scenario.solver.engine = engine.parse().expect("engine name");
     loaded.scenario.solver.rtol = rtol;
     run_scenario(&loaded, &mut |_| {}).expect("run")
 }

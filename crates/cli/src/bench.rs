@@ -10,7 +10,7 @@ use std::time::Instant;
 use anyhow::Context;
 use fistage_model::Loaded;
 use fistage_sim::{
-    Engine, Excitation, ScenarioExcitation, SimSettings, Trajectory, engine_by_name, initial_state,
+    Engine, Excitation, ScenarioExcitation, SimSettings, Trajectory, engine_for, initial_state,
 };
 
 /// Arguments of `fistage bench`.
@@ -263,8 +263,7 @@ fn ident_table(repeat: usize) -> anyhow::Result<()> {
 
 fn engine_table(args: &BenchArgs, scenario: &Path, rtols: &[f64]) -> anyhow::Result<()> {
     let loaded = fistage_model::load(scenario)?;
-    let engine = engine_by_name(&loaded.scenario.solver.engine)
-        .with_context(|| format!("unknown engine {}", loaded.scenario.solver.engine))?;
+    let engine = engine_for(&loaded.scenario);
     eprintln!("reference run at rtol {:e} ...", args.reference_rtol);
     let reference = time_run(&loaded, engine.as_ref(), args.reference_rtol, 1)?;
     let simulated = loaded.scenario.duration;

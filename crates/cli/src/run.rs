@@ -6,6 +6,7 @@ use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
+use fistage_model::EngineKind;
 use fistage_sim::{RunOutput, SignalSummary};
 
 use crate::{figures, progress};
@@ -24,9 +25,9 @@ pub struct RunArgs {
     /// Skip the plots.
     #[arg(long)]
     pub no_plots: bool,
-    /// Engine to use instead of the scenario's (`native` or `rapier`).
+    /// Engine to use instead of the scenario's (`native`, `rosenbrock` or `rapier`).
     #[arg(long)]
-    pub engine: Option<String>,
+    pub engine: Option<EngineKind>,
     /// Fixed step of the rapier engine, s (instead of `rapier.dt`).
     #[arg(long)]
     pub dt: Option<f64>,
@@ -42,8 +43,8 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         );
         loaded.scenario.solver.rtol = rtol;
     }
-    if let Some(engine) = &args.engine {
-        loaded.scenario.solver.engine = engine.clone();
+    if let Some(engine) = args.engine {
+        loaded.scenario.solver.engine = engine;
     }
     if let Some(dt) = args.dt {
         anyhow::ensure!(
@@ -180,7 +181,7 @@ fn print_summary(loaded: &fistage_model::Loaded, output: &RunOutput) {
     }
     let stats = &output.trajectory.stats;
     // The fixed-step engine names its step in place of a tolerance.
-    let setting = if scenario.solver.engine == "rapier" {
+    let setting = if !scenario.solver.engine.is_adaptive() {
         String::new()
     } else {
         format!(" rtol {:e}", scenario.solver.rtol)

@@ -39,6 +39,6 @@ pub use robot::{FISTAGE_NS, IsolatorKey, RobotSpec};
 pub use rule::{Rule, RuleViolation};
 pub use scalar::{Dual64, Scalar};
 pub use scenario::{
-    ControllerSettings, Override, PayloadSettings, RapierSettings, Scenario, SolverSettings, Start,
-    StopSettings,
+    ControllerSettings, EngineKind, Override, PayloadSettings, RapierSettings, Scenario,
+    SolverSettings, Start, StopSettings,
 };

@@ -59,7 +59,7 @@ struct ScenarioFile {
     #[serde(default)]
     solver: SolverSettings,
     /// Shorthand for `solver.engine`.
-    engine: Option<String>,
+    engine: Option<EngineKind>,
     #[serde(default)]
     rapier: RapierSettings,
     #[serde(default)]
@@ -178,13 +178,74 @@ impl Default for ReferenceFile {
     }
 }
 
+/// Which engine integrates a scenario (`solver.engine`, or `engine` at the top).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EngineKind {
+    /// Error-controlled explicit Dormand-Prince 5(4) (also `dopri5`).
+    #[default]
+    #[serde(alias = "dopri5")]
+    Native,
+    /// Linearly implicit Rosenbrock-W ROS34PW2 with the exact Jacobian (also `implicit`).
+    #[serde(alias = "implicit")]
+    Rosenbrock,
+    /// rapier3d-f64 with a fixed step, under the model's own force elements.
+    Rapier,
+}
+
+impl EngineKind {
+    /// Every engine, in the order help texts list them.
+    pub const ALL: [EngineKind; 3] = [
+        EngineKind::Native,
+        EngineKind::Rosenbrock,
+        EngineKind::Rapier,
+    ];
+
+    /// The name in scenario files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            EngineKind::Native => "native",
+            EngineKind::Rosenbrock => "rosenbrock",
+            EngineKind::Rapier => "rapier",
+        }
+    }
+
+    /// Whether the engine controls its error (the rapier engine takes fixed steps).
+    pub fn is_adaptive(self) -> bool {
+        self != EngineKind::Rapier
+    }
+}
+
+impl std::fmt::Display for EngineKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for EngineKind {
+    type Err = String;
+
+    /// Parses a name or alias as scenario files accept them.
+    fn from_str(text: &str) -> Result<Self, String> {
+        match text {
+            "native" | "dopri5" => Ok(EngineKind::Native),
+            "rosenbrock" | "implicit" => Ok(EngineKind::Rosenbrock),
+            "rapier" => Ok(EngineKind::Rapier),
+            other => Err(format!(
+                "unknown engine \"{other}\" (available: {})",
+                EngineKind::ALL.map(EngineKind::name).join(", ")
+            )),
+        }
+    }
+}
+
 /// Which engine integrates the model, and how tightly.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SolverSettings {
-    /// Engine name (`native`).
-    #[serde(default = "default_engine")]
-    pub engine: String,
+    /// The engine.
+    #[serde(default)]
+    pub engine: EngineKind,
     /// Relative tolerance.
     #[serde(default = "default_rtol")]
     pub rtol: f64,
@@ -198,9 +259,6 @@ pub struct SolverSettings {
     pub max_steps: u64,
 }
 
-fn default_engine() -> String {
-    "native".into()
-}
 fn default_rtol() -> f64 {
     1e-8
 }
@@ -214,7 +272,7 @@ fn default_max_steps() -> u64 {
 impl Default for SolverSettings {
     fn default() -> Self {
         Self {
-            engine: default_engine(),
+            engine: EngineKind::default(),
             rtol: default_rtol(),
             atol_scale: 1.0,
             max_step: None,
@@ -394,7 +452,7 @@ impl Scenario {
         }
         let mut solver = raw.solver;
         if let Some(engine) = raw.engine {
-            if solver.engine != default_engine() && solver.engine != engine {
+            if solver.engine != EngineKind::default() && solver.engine != engine {
                 return Err(checker.error(
                     "engine",
                     format!(

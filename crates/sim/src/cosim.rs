@@ -1,12 +1,13 @@
 //! Stepping a model between communication points, as a co-simulation master
 //! asks for: the inputs an importer sets are held over each step (added to the
 //! scenario's own reference profile), the native engine integrates with error
-//! control in between, and the stepper can be checkpointed and resumed bit
-//! for bit.
+//! control in between through the one driver of [`crate::driver`], and the
+//! stepper can be checkpointed and resumed bit for bit.
 
 use fistage_model::{Inputs, Model, Reference, ReferenceSample, Workspace};
 
-use crate::dopri::{Checkpoint, DormandPrince, OdeSystem, StepFailure, Tolerances};
+use crate::dopri::{Checkpoint, DormandPrince};
+use crate::driver::{ModelSystem, drive, tolerances};
 use crate::engine::{Excitation, SimError};
 
 /// The inputs over a communication step: the scenario's reference profile plus
@@ -35,23 +36,6 @@ impl Excitation for HeldInputs {
 
     fn breakpoints(&self) -> Vec<f64> {
         self.profile.breakpoints()
-    }
-}
-
-struct System<'a> {
-    model: &'a Model,
-    excitation: &'a HeldInputs,
-    workspace: &'a mut Workspace,
-}
-
-impl OdeSystem for System<'_> {
-    fn dim(&self) -> usize {
-        self.model.n_states()
-    }
-
-    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
-        let inputs = self.excitation.inputs(t);
-        self.model.rhs(x, &inputs, dx, self.workspace);
     }
 }
 
@@ -109,21 +93,6 @@ impl Stepper {
         self.checkpoint = checkpoint;
     }
 
-    fn integrator_tolerances(&self, model: &Model) -> Tolerances {
-        let t = &self.tolerances;
-        Tolerances {
-            rtol: t.rtol,
-            atol: model
-                .layout
-                .nominal
-                .iter()
-                .map(|s| s * t.rtol * t.atol_scale)
-                .collect(),
-            max_step: t.max_step.unwrap_or(f64::INFINITY),
-            min_step_relative: 1e-14,
-        }
-    }
-
     /// Integrates to `t_end` with the inputs held; restarts at the profile's
     /// breakpoints inside the step. On failure the stepper is left where it
     /// was (the caller may retry with a smaller step or stop).
@@ -140,12 +109,9 @@ impl Stepper {
                 "cannot advance from t = {t0} s to t = {t_end} s"
             )));
         }
-        let tolerances = self.integrator_tolerances(model);
-        let mut system = System {
-            model,
-            excitation,
-            workspace,
-        };
+        let t = &self.tolerances;
+        let tolerances = tolerances(model, t.rtol, t.atol_scale, t.max_step);
+        let mut system = ModelSystem::new(model, excitation, workspace);
         let mut integrator = if self.checkpoint.h > 0.0 {
             DormandPrince::resume(&mut system, &self.checkpoint, tolerances)
         } else {
@@ -155,31 +121,13 @@ impl Stepper {
             started.counts.rejected += self.checkpoint.counts.rejected;
             started
         };
-        let mut stops: Vec<f64> = excitation
-            .breakpoints()
-            .into_iter()
-            .filter(|&b| b > t0 && b < t_end)
-            .collect();
-        stops.sort_by(f64::total_cmp);
-        stops.push(t_end);
-        let budget_start = integrator.counts.steps + integrator.counts.rejected;
-        for (segment, &t_stop) in stops.iter().enumerate() {
-            if segment > 0 {
-                integrator.restart(&mut system);
-            }
-            while integrator.t < t_stop {
-                integrator
-                    .step(&mut system, t_stop)
-                    .map_err(|failure| underflow(model, failure))?;
-                let used = integrator.counts.steps + integrator.counts.rejected - budget_start;
-                if used > self.tolerances.max_steps_per_advance {
-                    return Err(SimError::TooManySteps {
-                        t: integrator.t,
-                        steps: used,
-                    });
-                }
-            }
-        }
+        drive(
+            &mut integrator,
+            &mut system,
+            t_end,
+            t.max_steps_per_advance,
+            |_| {},
+        )?;
         if let Some(i) = integrator.x.iter().position(|v| !v.is_finite()) {
             return Err(SimError::StepSizeUnderflow {
                 t: integrator.t,
@@ -189,16 +137,6 @@ impl Stepper {
         }
         self.checkpoint = integrator.checkpoint();
         Ok(())
-    }
-}
-
-fn underflow(model: &Model, failure: StepFailure) -> SimError {
-    match failure {
-        StepFailure::StepSizeUnderflow { t, h, non_finite } => SimError::StepSizeUnderflow {
-            t,
-            h,
-            non_finite: non_finite.map(|i| model.layout.names[i].clone()),
-        },
     }
 }
 

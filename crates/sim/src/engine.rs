@@ -1,15 +1,18 @@
 //! Engines integrate a [`Model`] driven by an [`Excitation`] and return a
 //! [`Trajectory`] sampled on a uniform grid. The native engine is the
-//! error-controlled Dormand-Prince 5(4) of [`crate::dopri`], restarted at every
-//! discontinuity of the inputs.
+//! error-controlled Dormand-Prince 5(4) of [`crate::dopri`], the Rosenbrock
+//! engine the linearly implicit method of [`crate::rosenbrock`]; both step
+//! through the one driver of [`crate::driver`]. Which engine runs is an
+//! [`EngineKind`], checked when the scenario is read.
 
 use std::time::Instant;
 
-use fistage_model::{Inputs, Model, Reference, Scenario, Workspace};
+use fistage_model::{EngineKind, Inputs, Model, Reference, Scenario};
 use thiserror::Error;
 
-use crate::dopri::{DormandPrince, OdeSystem, StepCounts, StepFailure, Tolerances};
-use crate::rosenbrock::{JacobianSystem, Rosenbrock};
+use crate::dopri::{DormandPrince, Tolerances};
+use crate::driver::{Integrating, ModelSystem, drive, tolerances};
+use crate::rosenbrock::Rosenbrock;
 use crate::trajectory::{SolverStats, Trajectory};
 
 /// What drives the model's inputs over time.
@@ -148,8 +151,13 @@ fn cause_text(non_finite: &Option<String>) -> String {
 
 /// An integration engine.
 pub trait Engine {
+    /// Which engine this is.
+    fn kind(&self) -> EngineKind;
+
     /// Engine name as used in scenario files.
-    fn name(&self) -> &'static str;
+    fn name(&self) -> &'static str {
+        self.kind().name()
+    }
 
     /// Integrates from `x0` at t = 0; `progress` receives the fraction done.
     fn simulate(
@@ -165,45 +173,6 @@ pub trait Engine {
 /// Error-controlled explicit Dormand-Prince 5(4) with dense output.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct NativeEngine;
-
-struct ModelSystem<'a> {
-    model: &'a Model,
-    excitation: &'a dyn Excitation,
-    /// The inputs, when they do not depend on time.
-    constant_inputs: Option<Inputs>,
-    workspace: Workspace,
-}
-
-impl<'a> ModelSystem<'a> {
-    fn new(model: &'a Model, excitation: &'a dyn Excitation) -> Self {
-        Self {
-            model,
-            excitation,
-            constant_inputs: excitation.is_constant().then(|| excitation.inputs(0.0)),
-            workspace: model.workspace(),
-        }
-    }
-
-    #[inline]
-    fn inputs(&self, t: f64) -> Inputs {
-        match &self.constant_inputs {
-            Some(inputs) => *inputs,
-            None => self.excitation.inputs(t),
-        }
-    }
-}
-
-impl OdeSystem for ModelSystem<'_> {
-    fn dim(&self) -> usize {
-        self.model.n_states()
-    }
-
-    #[inline]
-    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
-        let inputs = self.inputs(t);
-        self.model.rhs(x, &inputs, dx, &mut self.workspace);
-    }
-}
 
 pub(crate) fn check_settings(
     model: &Model,
@@ -255,70 +224,10 @@ pub fn sample_times(t_end: f64, dt: f64) -> Vec<f64> {
     times
 }
 
-/// What the adaptive engines share: step to a stop time, restart after a
-/// discontinuity, interpolate inside the last step.
-trait Integrating {
-    fn time(&self) -> f64;
-    fn advance(&mut self, system: &mut ModelSystem, t_stop: f64) -> Result<(), StepFailure>;
-    fn restart(&mut self, system: &mut ModelSystem);
-    fn interpolate(&self, t: f64, out: &mut [f64]);
-    fn counts(&self) -> StepCounts;
-}
-
-/// Both integrators have the same stepping interface over different system traits.
-macro_rules! integrating {
-    ($integrator:ty) => {
-        impl Integrating for $integrator {
-            fn time(&self) -> f64 {
-                self.t
-            }
-            fn advance(
-                &mut self,
-                system: &mut ModelSystem,
-                t_stop: f64,
-            ) -> Result<(), StepFailure> {
-                self.step(system, t_stop)
-            }
-            fn restart(&mut self, system: &mut ModelSystem) {
-                <$integrator>::restart(self, system);
-            }
-            fn interpolate(&self, t: f64, out: &mut [f64]) {
-                <$integrator>::interpolate(self, t, out);
-            }
-            fn counts(&self) -> StepCounts {
-                self.counts
-            }
-        }
-    };
-}
-
-integrating!(DormandPrince);
-integrating!(Rosenbrock);
-
-impl JacobianSystem for ModelSystem<'_> {
-    fn jacobian(&mut self, t: f64, x: &[f64]) -> nalgebra::DMatrix<f64> {
-        self.model.jacobian(x, &self.inputs(t))
-    }
-}
-
-fn tolerances(model: &Model, settings: &SimSettings) -> Tolerances {
-    Tolerances {
-        rtol: settings.rtol,
-        atol: model
-            .layout
-            .nominal
-            .iter()
-            .map(|s| s * settings.rtol * settings.atol_scale)
-            .collect(),
-        max_step: settings.max_step.unwrap_or(f64::INFINITY),
-        min_step_relative: 1e-14,
-    }
-}
-
-/// The loop of the adaptive engines: segments between the excitation's
-/// breakpoints, uniform samples by interpolation, step budget, progress.
+/// The loop of the adaptive engines: the driver's segments and step budget,
+/// uniform samples by interpolation, progress.
 fn integrate<I: Integrating>(
-    engine: &'static str,
+    engine: EngineKind,
     model: &Model,
     x0: &[f64],
     excitation: &dyn Excitation,
@@ -329,44 +238,20 @@ fn integrate<I: Integrating>(
     check_settings(model, x0, settings)?;
     let started = Instant::now();
     let n = model.n_states();
-    let mut system = ModelSystem::new(model, excitation);
+    let mut workspace = model.workspace();
+    let mut system = ModelSystem::new(model, excitation, &mut workspace);
     let times = sample_times(settings.t_end, settings.sample_interval);
     let mut trajectory = Trajectory::with_capacity(n, times.len());
     trajectory.push(0.0, x0);
     let mut next_sample = 1;
     let mut integrator = start(&mut system);
-    let mut segment_ends: Vec<f64> = excitation
-        .breakpoints()
-        .into_iter()
-        .filter(|&b| b > 0.0 && b < settings.t_end)
-        .collect();
-    segment_ends.sort_by(f64::total_cmp);
-    segment_ends.dedup();
-    segment_ends.push(settings.t_end);
     let mut buffer = vec![0.0; n];
-    for (segment, &t_stop) in segment_ends.iter().enumerate() {
-        if segment > 0 {
-            integrator.restart(&mut system);
-        }
-        while integrator.time() < t_stop {
-            integrator
-                .advance(&mut system, t_stop)
-                .map_err(|failure| match failure {
-                    StepFailure::StepSizeUnderflow { t, h, non_finite } => {
-                        SimError::StepSizeUnderflow {
-                            t,
-                            h,
-                            non_finite: non_finite.map(|i| model.layout.names[i].clone()),
-                        }
-                    }
-                })?;
-            let counts = integrator.counts();
-            if counts.steps + counts.rejected > settings.max_steps {
-                return Err(SimError::TooManySteps {
-                    t: integrator.time(),
-                    steps: counts.steps,
-                });
-            }
+    drive(
+        &mut integrator,
+        &mut system,
+        settings.t_end,
+        settings.max_steps,
+        |integrator| {
             while next_sample < times.len()
                 && times[next_sample] <= integrator.time() * (1.0 + 1e-14)
             {
@@ -374,23 +259,27 @@ fn integrate<I: Integrating>(
                 trajectory.push(times[next_sample], &buffer);
                 next_sample += 1;
             }
-            if counts.steps.is_multiple_of(2048) {
+            if integrator.counts().steps.is_multiple_of(2048) {
                 progress(integrator.time() / settings.t_end);
             }
-        }
-    }
+        },
+    )?;
     progress(1.0);
     trajectory.stats = SolverStats {
-        engine: engine.to_string(),
+        engine: engine.name().to_string(),
         counts: integrator.counts(),
         wall_time_s: started.elapsed().as_secs_f64(),
     };
     Ok(trajectory)
 }
 
+fn settings_tolerances(model: &Model, settings: &SimSettings) -> Tolerances {
+    tolerances(model, settings.rtol, settings.atol_scale, settings.max_step)
+}
+
 impl Engine for NativeEngine {
-    fn name(&self) -> &'static str {
-        "native"
+    fn kind(&self) -> EngineKind {
+        EngineKind::Native
     }
 
     fn simulate(
@@ -401,9 +290,9 @@ impl Engine for NativeEngine {
         settings: &SimSettings,
         progress: &mut dyn FnMut(f64),
     ) -> Result<Trajectory, SimError> {
-        let tol = tolerances(model, settings);
+        let tol = settings_tolerances(model, settings);
         integrate(
-            self.name(),
+            self.kind(),
             model,
             x0,
             excitation,
@@ -421,8 +310,8 @@ impl Engine for NativeEngine {
 pub struct RosenbrockEngine;
 
 impl Engine for RosenbrockEngine {
-    fn name(&self) -> &'static str {
-        "rosenbrock"
+    fn kind(&self) -> EngineKind {
+        EngineKind::Rosenbrock
     }
 
     fn simulate(
@@ -433,10 +322,10 @@ impl Engine for RosenbrockEngine {
         settings: &SimSettings,
         progress: &mut dyn FnMut(f64),
     ) -> Result<Trajectory, SimError> {
-        let tol = tolerances(model, settings);
+        let tol = settings_tolerances(model, settings);
         let span = settings.sample_interval.min(settings.t_end);
         integrate(
-            self.name(),
+            self.kind(),
             model,
             x0,
             excitation,
@@ -447,25 +336,26 @@ impl Engine for RosenbrockEngine {
     }
 }
 
-/// An engine by name, with default settings (the rapier engine without colliders).
-pub fn engine_by_name(name: &str) -> Option<Box<dyn Engine>> {
-    match name {
-        "native" | "dopri5" => Some(Box::new(NativeEngine)),
-        "rosenbrock" | "implicit" => Some(Box::new(RosenbrockEngine)),
-        "rapier" => Some(Box::new(crate::rapier_engine::RapierEngine::default())),
-        _ => None,
+/// The engine of a kind with default settings (the rapier engine without colliders).
+pub fn engine_of_kind(kind: EngineKind) -> Box<dyn Engine> {
+    match kind {
+        EngineKind::Native => Box::new(NativeEngine),
+        EngineKind::Rosenbrock => Box::new(RosenbrockEngine),
+        EngineKind::Rapier => Box::new(crate::rapier_engine::RapierEngine::default()),
     }
+}
+
+/// An engine by name or alias (`native`, `dopri5`, `rosenbrock`, `implicit`, `rapier`).
+pub fn engine_by_name(name: &str) -> Option<Box<dyn Engine>> {
+    name.parse().ok().map(engine_of_kind)
 }
 
 /// The engine a scenario names (`solver.engine` or `engine`), with its settings.
-pub fn engine_for(scenario: &Scenario) -> Option<Box<dyn Engine>> {
-    match scenario.solver.engine.as_str() {
-        "rapier" => Some(Box::new(crate::rapier_engine::RapierEngine {
+pub fn engine_for(scenario: &Scenario) -> Box<dyn Engine> {
+    match scenario.solver.engine {
+        EngineKind::Rapier => Box::new(crate::rapier_engine::RapierEngine {
             settings: scenario.rapier.clone(),
-        })),
-        other => engine_by_name(other),
+        }),
+        kind => engine_of_kind(kind),
     }
 }
-
-/// Names accepted by [`engine_by_name`].
-pub const ENGINE_NAMES: [&str; 3] = ["native", "rosenbrock", "rapier"];

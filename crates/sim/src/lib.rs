@@ -7,6 +7,7 @@
 
 pub mod cosim;
 pub mod dopri;
+mod driver;
 pub mod engine;
 pub mod metrics;
 pub mod rapier_engine;
@@ -17,8 +18,8 @@ pub mod trajectory;
 pub use cosim::{HeldInputs, Stepper, StepperTolerances};
 pub use dopri::{Checkpoint, StepCounts};
 pub use engine::{
-    ENGINE_NAMES, Engine, Excitation, NativeEngine, RosenbrockEngine, ScenarioExcitation, SimError,
-    SimSettings, engine_by_name, engine_for, sample_times,
+    Engine, Excitation, NativeEngine, RosenbrockEngine, ScenarioExcitation, SimError, SimSettings,
+    engine_by_name, engine_for, engine_of_kind, sample_times,
 };
 pub use metrics::{SignalSummary, WindowStats, summarize, window_stats};
 pub use rapier_engine::RapierEngine;

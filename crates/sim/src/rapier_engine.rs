@@ -547,8 +547,8 @@ impl RapierEngine {
 }
 
 impl Engine for RapierEngine {
-    fn name(&self) -> &'static str {
-        "rapier"
+    fn kind(&self) -> fistage_model::EngineKind {
+        fistage_model::EngineKind::Rapier
     }
 
     fn simulate(

@@ -1,12 +1,10 @@
 //! One scenario run from a loaded study: initial state, engine choice,
 //! integration, output signals and steady-state statistics.
 
-use fistage_model::{EquilibriumKind, LoadError, Loaded, Model, Scenario, Start};
+use fistage_model::{EngineKind, EquilibriumKind, LoadError, Loaded, Model, Scenario, Start};
 use thiserror::Error;
 
-use crate::engine::{
-    ENGINE_NAMES, Excitation, ScenarioExcitation, SimError, SimSettings, engine_for,
-};
+use crate::engine::{Excitation, ScenarioExcitation, SimError, SimSettings, engine_for};
 use crate::metrics::{SignalSummary, summarize};
 use crate::trajectory::{SignalTable, Trajectory};
 
@@ -106,18 +104,9 @@ fn check_signal_names(model: &Model, scenario: &Scenario) -> Result<(), LoadErro
 pub fn run_scenario(loaded: &Loaded, progress: &mut dyn FnMut(f64)) -> Result<RunOutput, RunError> {
     let scenario = &loaded.scenario;
     let model = &loaded.model;
-    let engine = engine_for(scenario).ok_or_else(|| {
-        scenario.error(
-            "solver.engine",
-            format!(
-                "unknown engine \"{}\" (available: {})",
-                scenario.solver.engine,
-                ENGINE_NAMES.join(", ")
-            ),
-        )
-    })?;
+    let engine = engine_for(scenario);
     check_signal_names(model, scenario)?;
-    if engine.name() != "rapier" {
+    if engine.kind() != EngineKind::Rapier {
         let colliders = if !scenario.rapier.stops.is_empty() {
             Some("rapier.stop")
         } else if scenario.rapier.payload.is_some() {

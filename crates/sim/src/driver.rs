@@ -1,0 +1,187 @@
+//! The one adaptive driver: every error-controlled integration of a model
+//! (a `fistage run`, a sweep point, a Lyapunov estimate, an FMU's
+//! communication step) goes through [`drive`]. It owns the ODE adaptor over
+//! the model, the absolute-tolerance formula, the segments between the
+//! inputs' discontinuities (the integrator restarts at each), the step
+//! budget and the mapping of integrator failures to [`SimError`].
+
+use fistage_model::{Inputs, Model, Workspace};
+
+use crate::dopri::{DormandPrince, OdeSystem, StepCounts, StepFailure, Tolerances};
+use crate::engine::{Excitation, SimError};
+use crate::rosenbrock::{JacobianSystem, Rosenbrock};
+
+/// The model as an ODE `x' = f(t, x)` under an excitation.
+pub(crate) struct ModelSystem<'a> {
+    model: &'a Model,
+    excitation: &'a dyn Excitation,
+    /// The inputs, when they do not depend on time.
+    constant_inputs: Option<Inputs>,
+    workspace: &'a mut Workspace,
+}
+
+impl<'a> ModelSystem<'a> {
+    pub(crate) fn new(
+        model: &'a Model,
+        excitation: &'a dyn Excitation,
+        workspace: &'a mut Workspace,
+    ) -> Self {
+        Self {
+            model,
+            excitation,
+            constant_inputs: excitation.is_constant().then(|| excitation.inputs(0.0)),
+            workspace,
+        }
+    }
+
+    #[inline]
+    fn inputs(&self, t: f64) -> Inputs {
+        match &self.constant_inputs {
+            Some(inputs) => *inputs,
+            None => self.excitation.inputs(t),
+        }
+    }
+}
+
+impl OdeSystem for ModelSystem<'_> {
+    fn dim(&self) -> usize {
+        self.model.n_states()
+    }
+
+    #[inline]
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
+        let inputs = self.inputs(t);
+        self.model.rhs(x, &inputs, dx, self.workspace);
+    }
+}
+
+impl JacobianSystem for ModelSystem<'_> {
+    fn jacobian(&mut self, t: f64, x: &[f64]) -> nalgebra::DMatrix<f64> {
+        self.model.jacobian(x, &self.inputs(t))
+    }
+}
+
+/// Error control: absolute tolerance of state i is `rtol * atol_scale * nominal_i`.
+pub(crate) fn tolerances(
+    model: &Model,
+    rtol: f64,
+    atol_scale: f64,
+    max_step: Option<f64>,
+) -> Tolerances {
+    Tolerances {
+        rtol,
+        atol: model
+            .layout
+            .nominal
+            .iter()
+            .map(|s| s * rtol * atol_scale)
+            .collect(),
+        max_step: max_step.unwrap_or(f64::INFINITY),
+        min_step_relative: 1e-14,
+    }
+}
+
+/// What the adaptive integrators share: step towards a stop time, restart
+/// after a discontinuity, interpolate inside the last step.
+pub(crate) trait Integrating {
+    /// Time reached.
+    fn time(&self) -> f64;
+    /// One step, not past `t_stop`.
+    fn advance(&mut self, system: &mut ModelSystem, t_stop: f64) -> Result<(), StepFailure>;
+    /// Forget the history: the inputs jumped.
+    fn restart(&mut self, system: &mut ModelSystem);
+    /// The solution at `t` inside the last step.
+    fn interpolate(&self, t: f64, out: &mut [f64]);
+    /// Steps, rejections and evaluations so far.
+    fn counts(&self) -> StepCounts;
+}
+
+/// Both integrators have the same stepping interface over different system traits.
+macro_rules! integrating {
+    ($integrator:ty) => {
+        impl Integrating for $integrator {
+            fn time(&self) -> f64 {
+                self.t
+            }
+            fn advance(
+                &mut self,
+                system: &mut ModelSystem,
+                t_stop: f64,
+            ) -> Result<(), StepFailure> {
+                self.step(system, t_stop)
+            }
+            fn restart(&mut self, system: &mut ModelSystem) {
+                <$integrator>::restart(self, system);
+            }
+            fn interpolate(&self, t: f64, out: &mut [f64]) {
+                <$integrator>::interpolate(self, t, out);
+            }
+            fn counts(&self) -> StepCounts {
+                self.counts
+            }
+        }
+    };
+}
+
+integrating!(DormandPrince);
+integrating!(Rosenbrock);
+
+/// The ends of the segments from `t0` to `t_end`: the breakpoints strictly
+/// inside, sorted and without repeats, then `t_end`.
+pub(crate) fn segment_ends(breakpoints: Vec<f64>, t0: f64, t_end: f64) -> Vec<f64> {
+    let mut ends: Vec<f64> = breakpoints
+        .into_iter()
+        .filter(|&b| b > t0 && b < t_end)
+        .collect();
+    ends.sort_by(f64::total_cmp);
+    ends.dedup();
+    ends.push(t_end);
+    ends
+}
+
+/// A failed step, in the model's words.
+pub(crate) fn step_failure(model: &Model, failure: StepFailure) -> SimError {
+    match failure {
+        StepFailure::StepSizeUnderflow { t, h, non_finite } => SimError::StepSizeUnderflow {
+            t,
+            h,
+            non_finite: non_finite.map(|i| model.layout.names[i].clone()),
+        },
+    }
+}
+
+/// Integrates through the excitation's segments up to `t_end`: restarts at
+/// each breakpoint, stops with [`SimError::TooManySteps`] once more than
+/// `max_steps` steps (accepted plus rejected) were taken in this call, and
+/// calls `after_step` after every accepted step.
+pub(crate) fn drive<I: Integrating>(
+    integrator: &mut I,
+    system: &mut ModelSystem,
+    t_end: f64,
+    max_steps: u64,
+    mut after_step: impl FnMut(&I),
+) -> Result<(), SimError> {
+    let model = system.model;
+    let ends = segment_ends(system.excitation.breakpoints(), integrator.time(), t_end);
+    let start = integrator.counts();
+    let used = |counts: StepCounts| counts.steps + counts.rejected - start.steps - start.rejected;
+    for (segment, &t_stop) in ends.iter().enumerate() {
+        if segment > 0 {
+            integrator.restart(system);
+        }
+        while integrator.time() < t_stop {
+            integrator
+                .advance(system, t_stop)
+                .map_err(|failure| step_failure(model, failure))?;
+            let steps = used(integrator.counts());
+            if steps > max_steps {
+                return Err(SimError::TooManySteps {
+                    t: integrator.time(),
+                    steps,
+                });
+            }
+            after_step(integrator);
+        }
+    }
+    Ok(())
+}
