@@ -226,7 +226,13 @@ impl Instance {
         self.phase = Phase::Fatal;
     }
 
-    /// The variables, in value-reference order.
+    /// The model: built from the unit's resources, and rebuilt with the
+    /// parameters an importer set at fmi2ExitInitializationMode.
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    /// Every variable, in value-reference order.
     pub fn variables(&self) -> &[Variable] {
         &self.variables
     }

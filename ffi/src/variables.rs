@@ -84,7 +84,7 @@ pub fn variables(model: &Model, scenario: &Scenario) -> Vec<Variable> {
             push(
                 parameter.short_name().to_string(),
                 Causality::Parameter,
-                Some(parameter.read(scenario, robot)),
+                parameter.read_model(model),
                 parameter.unit(),
                 parameter.description(robot),
                 Binding::Parameter(parameter),

@@ -44,6 +44,7 @@ use std::fmt;
 
 use crate::error::LoadError;
 use crate::lugre::{InvalidLugreParameter, LugreKey, LugreParams};
+use crate::model::Model;
 use crate::robot::{IsolatorKey, IsolatorSpec, RobotSpec};
 use crate::rule::Rule;
 use crate::scenario::Scenario;
@@ -304,6 +305,14 @@ impl Parameter {
         match self.target {
             Target::Gain(gain) => scenario.controller.as_ref().map_or(0.0, |c| c.gain(gain)),
             Target::PlatformVelocity => scenario.platform_velocity,
+            _ => self.read_robot(robot),
+        }
+    }
+
+    /// A value held by the robot description (the neutral value for relative ones).
+    fn read_robot(&self, robot: &RobotSpec) -> f64 {
+        match self.target {
+            Target::Gain(_) | Target::PlatformVelocity => f64::NAN,
             Target::Alpha | Target::Beta => 1.0,
             Target::Spread(_) => 0.0,
             Target::Lugre(i, key) => key.get(&robot.frictions[i].lugre),
@@ -315,6 +324,21 @@ impl Parameter {
                 Element::Sensor(i) => robot.sensors[i].point[axis],
             },
             Target::LinkMass(i) => robot.links[i].mass,
+        }
+    }
+
+    /// The value in an assembled model, where the model holds it: servo gains
+    /// and robot-file values (after overrides). `None` for the platform
+    /// velocity (an input, not part of a model) and for relative parameters.
+    pub fn read_model(&self, model: &Model) -> Option<f64> {
+        match self.target {
+            Target::Gain(gain) => model.controller.as_ref().map(|c| match gain {
+                Gain::K => c.k,
+                Gain::C => c.c,
+                Gain::KI => c.k_i,
+            }),
+            Target::PlatformVelocity | Target::Alpha | Target::Beta | Target::Spread(_) => None,
+            _ => Some(self.read_robot(model.robot())),
         }
     }
 
