@@ -10,6 +10,7 @@ use nalgebra::{Isometry3, Matrix3, Vector3};
 
 use crate::dynamics;
 use crate::error::LoadError;
+use crate::evaluator::Evaluator;
 use crate::model::{
     Body, Controller, Frame, FrictionContact, Isolator, Joint, JointMotion, MassBlock, Model,
     PointAxis, SignalInfo, StateKind, StateLayout,
@@ -530,8 +531,7 @@ impl<'a> Assembler<'a> {
             gravity: Vector3::from(scenario.gravity),
             signals: Vec::new(),
             layout,
-            translational_map: None,
-            rooted_plan: None,
+            evaluator: Evaluator::General,
             mass_blocks: Vec::new(),
             robot: robot.clone(),
         };
@@ -644,10 +644,16 @@ fn mass_blocks(model: &mut Model, mass: &nalgebra::DMatrix<f64>) -> Vec<MassBloc
             && matches!(model.bodies[body].joint.motion, JointMotion::Floating)
             && model.bodies[body].mass > 0.0
         {
-            block.free_body = model.bodies[body]
-                .inertia
-                .try_inverse()
-                .map(|inverse| (body, inverse));
+            let b = &model.bodies[body];
+            block.free_body = b.inertia.try_inverse().map(|inverse_inertia| {
+                let mass_properties = crate::laws::RigidBody {
+                    inverse_mass: 1.0 / b.mass,
+                    com: b.com,
+                    inertia: b.inertia,
+                    inverse_inertia,
+                };
+                (body, mass_properties)
+            });
         }
         let rotates = block
             .bodies
@@ -673,9 +679,8 @@ fn mass_blocks(model: &mut Model, mass: &nalgebra::DMatrix<f64>) -> Vec<MassBloc
 }
 
 /// The mass matrix must be positive definite at the zero configuration (every
-/// degree of freedom carries mass or inertia); when no joint rotates a body it
-/// is constant and its factor is kept (the constant-Jacobian path), otherwise
-/// the rooted-bodies plan is built when the structure allows it.
+/// degree of freedom carries mass or inertia); then the model's evaluator is
+/// chosen ([`Evaluator::choose`], the one place that decides it).
 fn check_mass_matrix(model: &mut Model, file: &Path) -> Result<(), LoadError> {
     let x = model.zero_state();
     let mass = dynamics::mass_matrix(model, &x);
@@ -696,13 +701,6 @@ fn check_mass_matrix(model: &mut Model, file: &Path) -> Result<(), LoadError> {
         ));
     };
     model.mass_blocks = mass_blocks(model, &mass);
-    if model.bodies.iter().all(|b| !b.joint.motion.rotates()) {
-        let inverse = factor.inverse();
-        model.translational_map = Some(crate::translational::TranslationalMap::build(
-            model, &inverse,
-        ));
-    } else {
-        model.rooted_plan = crate::rooted::RootedPlan::build(model);
-    }
+    model.evaluator = Evaluator::choose(model, &factor.inverse());
     Ok(())
 }

@@ -81,7 +81,12 @@ impl Model {
         let mut last_step = f64::INFINITY;
         for _ in 0..MAX_ITERATIONS {
             let (jacobian, tangent) = self.tangent_jacobian(&x, &inputs);
-            self.rhs_general(&x, &inputs.values(), &mut f, &mut ws);
+            self.rhs(&x, &inputs, &mut f, &mut ws);
+            if kind == EquilibriumKind::Sticking {
+                // The contact displacements are element values, which the
+                // fast evaluations of `rhs` do not fill.
+                self.evaluate(&x, &inputs, &mut ws);
+            }
             let rate = &tangent.project * DVector::from_column_slice(&f);
             let np = tangent.n_positions;
             let n = tangent.names.len();

@@ -10,6 +10,8 @@ pub mod body_motion;
 pub mod dynamics;
 pub mod equilibrium;
 pub mod error;
+mod evaluator;
+mod laws;
 pub mod linearize;
 pub mod lugre;
 pub mod model;

@@ -33,7 +33,8 @@ pub struct Tangent {
 }
 
 impl Model {
-    /// `df/dx` at (x, u), exact to round-off (dual numbers through the general dynamics).
+    /// `df/dx` at (x, u), exact to round-off: dual numbers through the
+    /// evaluation the simulation uses ([`Model::rhs_of`]).
     pub fn jacobian(&self, x: &[f64], inputs: &Inputs) -> DMatrix<f64> {
         let n = self.n_states();
         let u = inputs.values::<Dual64>();
@@ -43,7 +44,7 @@ impl Model {
         let mut jacobian = DMatrix::zeros(n, n);
         for col in 0..n {
             xd[col].eps = 1.0;
-            self.rhs_general(&xd, &u, &mut dx, &mut ws);
+            self.rhs_of(&xd, &u, &mut dx, &mut ws);
             for row in 0..n {
                 jacobian[(row, col)] = dx[row].eps;
             }
@@ -68,7 +69,7 @@ impl Model {
                 _ => &mut u.platform_velocity,
             };
             seeded.eps = 1.0;
-            self.rhs_general(&xd, &u, &mut dx, &mut ws);
+            self.rhs_of(&xd, &u, &mut dx, &mut ws);
             for row in 0..n {
                 jacobian[(row, col)] = dx[row].eps;
             }

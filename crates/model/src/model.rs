@@ -106,16 +106,16 @@ pub struct Body {
 /// from the world. Each block is factored on its own, and blocks without
 /// rotating joints are constant and kept inverted.
 #[derive(Debug, Clone, PartialEq)]
-pub struct MassBlock {
+pub(crate) struct MassBlock {
     /// Velocity indices of the block, ascending.
     pub dofs: Vec<usize>,
     /// Bodies of the subtree.
     pub bodies: Vec<usize>,
     /// Row-major inverse when the block does not depend on the configuration.
     pub constant_inverse: Option<Vec<f64>>,
-    /// When the block is one floating body: its inverse inertia about the
-    /// centre of mass (body axes), for the closed-form solve.
-    pub free_body: Option<(usize, Matrix3<f64>)>,
+    /// When the block is one floating body: that body and its mass
+    /// properties, for the closed-form solve.
+    pub free_body: Option<(usize, crate::laws::RigidBody)>,
 }
 
 /// A linear six-axis bushing (friction isolator).
@@ -331,10 +331,8 @@ pub struct Model {
     pub signals: Vec<SignalInfo>,
     /// Diagonal blocks of the mass matrix.
     pub(crate) mass_blocks: Vec<MassBlock>,
-    /// Constant Jacobians of a translational model.
-    pub(crate) translational_map: Option<crate::translational::TranslationalMap>,
-    /// Resolved geometry of a model whose bodies all hang from the world.
-    pub(crate) rooted_plan: Option<crate::rooted::RootedPlan>,
+    /// How the right-hand side is evaluated (chosen once, when built).
+    pub(crate) evaluator: crate::evaluator::Evaluator,
     /// The robot file after the scenario's overrides: what the parameter table reads.
     pub(crate) robot: crate::robot::RobotSpec,
 }

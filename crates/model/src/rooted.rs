@@ -18,8 +18,13 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::dynamics::{Workspace, bushing_force, rotation_log, servo_force};
-use crate::model::{Frame, Inputs, JointMotion, Model};
+use crate::dynamics::{InputValues, Workspace};
+use crate::laws::{
+    RigidBody, bushing_wrench, cast3, cast33, newton_euler, quaternion_rate, quaternion_rotation,
+    relative, relative_rotation, rotate, rotate_back, rotation_log, servo_forces,
+};
+use crate::model::{Frame, JointMotion, Model};
+use crate::scalar::Scalar;
 
 /// A floating body jointed to the world.
 #[derive(Debug, Clone, PartialEq)]
@@ -31,12 +36,7 @@ struct FloatingBody {
     /// Joint frame in the world; `None` when it is the identity.
     joint_rotation: Option<Matrix3<f64>>,
     joint_origin: Vector3<f64>,
-    inverse_mass: f64,
-    /// Centre of mass in body axes.
-    com: Vector3<f64>,
-    /// Inertia about the centre of mass and its inverse, body axes.
-    inertia: Matrix3<f64>,
-    inverse_inertia: Matrix3<f64>,
+    mass_properties: RigidBody,
 }
 
 /// A body on a straight rail jointed to the world: it never turns, so its
@@ -136,34 +136,58 @@ pub(crate) struct RootedPlan {
 }
 
 /// State of a floating body during one evaluation, world frame.
-#[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct FloatingState {
-    rotation: Matrix3<f64>,
-    origin: Vector3<f64>,
-    velocity: Vector3<f64>,
-    omega: Vector3<f64>,
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct FloatingState<S: Scalar> {
+    rotation: Matrix3<S>,
+    origin: Vector3<S>,
+    velocity: Vector3<S>,
+    omega: Vector3<S>,
     /// Sum of element forces.
-    force: Vector3<f64>,
+    force: Vector3<S>,
     /// Sum of element moments about `origin`.
-    moment: Vector3<f64>,
+    moment: Vector3<S>,
+}
+
+impl<S: Scalar> FloatingState<S> {
+    fn at_rest() -> Self {
+        Self {
+            rotation: Matrix3::identity(),
+            origin: Vector3::zeros(),
+            velocity: Vector3::zeros(),
+            omega: Vector3::zeros(),
+            force: Vector3::zeros(),
+            moment: Vector3::zeros(),
+        }
+    }
 }
 
 /// State of a rail body during one evaluation.
-#[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct RailState {
-    position: f64,
-    rate: f64,
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct RailState<S: Scalar> {
+    position: S,
+    rate: S,
     /// Sum of element forces along the rail.
-    force: f64,
+    force: S,
 }
 
 /// Scratch space of the fast path (part of [`Workspace`]).
-#[derive(Debug, Clone, Default)]
-pub(crate) struct RootedScratch {
-    floating: Vec<FloatingState>,
-    rails: Vec<RailState>,
+#[derive(Debug, Clone)]
+pub(crate) struct RootedScratch<S: Scalar = f64> {
+    floating: Vec<FloatingState<S>>,
+    rails: Vec<RailState<S>>,
     /// Per isolator: relative rotation vector and rate, in the parent's attach axes.
-    relative: Vec<(Vector3<f64>, Vector3<f64>)>,
+    relative: Vec<(Vector3<S>, Vector3<S>)>,
+}
+
+impl<S: Scalar> RootedScratch<S> {
+    /// No scratch space (models that take another path).
+    pub(crate) fn empty() -> Self {
+        Self {
+            floating: Vec::new(),
+            rails: Vec::new(),
+            relative: Vec::new(),
+        }
+    }
 }
 
 /// `None` for the identity, else the matrix.
@@ -171,31 +195,10 @@ fn unless_identity(m: Matrix3<f64>) -> Option<Matrix3<f64>> {
     (m != Matrix3::identity()).then_some(m)
 }
 
-/// `m^T v`, with `None` the identity.
+/// A constant optional rotation in scalar type S.
 #[inline(always)]
-fn to_local(m: &Option<Matrix3<f64>>, v: Vector3<f64>) -> Vector3<f64> {
-    match m {
-        Some(m) => m.tr_mul(&v),
-        None => v,
-    }
-}
-
-/// `m v`, with `None` the identity.
-#[inline(always)]
-fn to_world(m: &Option<Matrix3<f64>>, v: Vector3<f64>) -> Vector3<f64> {
-    match m {
-        Some(m) => m * v,
-        None => v,
-    }
-}
-
-/// `a b`, with `None` the identity.
-fn compose(a: &Option<Matrix3<f64>>, b: &Option<Matrix3<f64>>) -> Option<Matrix3<f64>> {
-    match (a, b) {
-        (Some(a), Some(b)) => Some(a * b),
-        (Some(m), None) | (None, Some(m)) => Some(*m),
-        (None, None) => None,
-    }
+fn cast_rotation<S: Scalar>(m: &Option<Matrix3<f64>>) -> Option<Matrix3<S>> {
+    m.as_ref().map(cast33::<S>)
 }
 
 impl RootedPlan {
@@ -220,10 +223,12 @@ impl RootedPlan {
                         v0: nq + joint.v_offset,
                         joint_rotation: unless_identity(joint.origin_rotation),
                         joint_origin: joint.origin.translation.vector,
-                        inverse_mass: 1.0 / body.mass,
-                        com: body.com,
-                        inertia: body.inertia,
-                        inverse_inertia: body.inertia.try_inverse()?,
+                        mass_properties: RigidBody {
+                            inverse_mass: 1.0 / body.mass,
+                            com: body.com,
+                            inertia: body.inertia,
+                            inverse_inertia: body.inertia.try_inverse()?,
+                        },
                     });
                 }
                 JointMotion::Prismatic { axis } => {
@@ -297,8 +302,8 @@ impl RootedPlan {
                 a.attach == b.attach && (a.carrier == b.carrier || (!turns(a) && !turns(b)))
             };
             let relative_rotation = if !turns(&parent) && !turns(&child) {
-                let relative = compose(&parent.attach.map(|m| m.transpose()), &child.attach);
-                RelativeRotation::Constant(relative.map_or(Vector3::zeros(), |r| rotation_log(&r)))
+                let constant = relative(&parent.attach, &child.attach);
+                RelativeRotation::Constant(constant.map_or(Vector3::zeros(), |r| rotation_log(&r)))
             } else {
                 isolators
                     .iter()
@@ -359,22 +364,27 @@ impl RootedPlan {
     }
 
     /// Scratch space sized for this plan.
-    pub(crate) fn scratch(&self) -> RootedScratch {
+    pub(crate) fn scratch<S: Scalar>(&self) -> RootedScratch<S> {
+        let rail = RailState {
+            position: S::zero(),
+            rate: S::zero(),
+            force: S::zero(),
+        };
         RootedScratch {
-            floating: vec![FloatingState::default(); self.floating.len()],
-            rails: vec![RailState::default(); self.rails.len()],
+            floating: vec![FloatingState::at_rest(); self.floating.len()],
+            rails: vec![rail; self.rails.len()],
             relative: vec![(Vector3::zeros(), Vector3::zeros()); self.isolators.len()],
         }
     }
 
     /// The state derivative.
-    pub(crate) fn rhs(
+    pub(crate) fn rhs<S: Scalar>(
         &self,
         model: &Model,
-        x: &[f64],
-        inputs: &Inputs,
-        dx: &mut [f64],
-        ws: &mut Workspace,
+        x: &[S],
+        inputs: &InputValues<S>,
+        dx: &mut [S],
+        ws: &mut Workspace<S>,
     ) {
         debug_assert!(
             ws.rooted.floating.len() == self.floating.len()
@@ -392,63 +402,63 @@ impl RootedPlan {
     }
 
     /// Poses and velocities of every body, and the position rates.
-    fn body_states(&self, x: &[f64], dx: &mut [f64], scratch: &mut RootedScratch) {
+    fn body_states<S: Scalar>(&self, x: &[S], dx: &mut [S], scratch: &mut RootedScratch<S>) {
         for (body, state) in self.floating.iter().zip(&mut scratch.floating) {
             let (q0, v0) = (body.q0, body.v0);
             let offset = Vector3::new(x[q0], x[q0 + 1], x[q0 + 2]);
             let (w, i, j, k) = (x[q0 + 3], x[q0 + 4], x[q0 + 5], x[q0 + 6]);
             let linear = Vector3::new(x[v0], x[v0 + 1], x[v0 + 2]);
             let angular = Vector3::new(x[v0 + 3], x[v0 + 4], x[v0 + 5]);
-            // Quaternion rate q' = (0, omega) q / 2, omega in the joint frame.
             dx[q0] = linear.x;
             dx[q0 + 1] = linear.y;
             dx[q0 + 2] = linear.z;
-            dx[q0 + 3] = -0.5 * (angular.x * i + angular.y * j + angular.z * k);
-            dx[q0 + 4] = 0.5 * (w * angular.x + angular.y * k - angular.z * j);
-            dx[q0 + 5] = 0.5 * (w * angular.y + angular.z * i - angular.x * k);
-            dx[q0 + 6] = 0.5 * (w * angular.z + angular.x * j - angular.y * i);
+            // Omega in the joint frame, the one the quaternion rotates into.
+            dx[q0 + 3..q0 + 7].copy_from_slice(&quaternion_rate([w, i, j, k], angular));
             let attitude = quaternion_rotation(w, i, j, k);
-            state.rotation = match &body.joint_rotation {
+            let joint = cast_rotation::<S>(&body.joint_rotation);
+            state.rotation = match &joint {
                 Some(joint) => joint * attitude,
                 None => attitude,
             };
-            state.origin = body.joint_origin + to_world(&body.joint_rotation, offset);
-            state.velocity = to_world(&body.joint_rotation, linear);
-            state.omega = to_world(&body.joint_rotation, angular);
+            state.origin = cast3::<S>(&body.joint_origin) + rotate(&joint, offset);
+            state.velocity = rotate(&joint, linear);
+            state.omega = rotate(&joint, angular);
             state.force = Vector3::zeros();
             state.moment = Vector3::zeros();
         }
         for (body, state) in self.rails.iter().zip(&mut scratch.rails) {
             state.position = x[body.q0];
             state.rate = x[body.v0];
-            state.force = 0.0;
+            state.force = S::zero();
             dx[body.q0] = state.rate;
         }
     }
 
     /// Where an isolator end's point is, world frame.
     #[inline(always)]
-    fn end_point(end: &IsolatorEnd, scratch: &RootedScratch) -> Vector3<f64> {
+    fn end_point<S: Scalar>(end: &IsolatorEnd, scratch: &RootedScratch<S>) -> Vector3<S> {
         match end.carrier {
-            Carrier::World => end.point,
-            Carrier::Rail(r) => end.point + end.rail_axis * scratch.rails[r].position,
+            Carrier::World => cast3::<S>(&end.point),
+            Carrier::Rail(r) => {
+                cast3::<S>(&end.point) + cast3::<S>(&end.rail_axis) * scratch.rails[r].position
+            }
             Carrier::Floating(f) => {
                 let body = &scratch.floating[f];
-                body.origin + body.rotation * end.point
+                body.origin + body.rotation * cast3::<S>(&end.point)
             }
         }
     }
 
     /// Velocity of the material point of an end's carrier at world point `at`.
     #[inline(always)]
-    fn carrier_velocity(
+    fn carrier_velocity<S: Scalar>(
         end: &IsolatorEnd,
-        at: &Vector3<f64>,
-        scratch: &RootedScratch,
-    ) -> Vector3<f64> {
+        at: &Vector3<S>,
+        scratch: &RootedScratch<S>,
+    ) -> Vector3<S> {
         match end.carrier {
             Carrier::World => Vector3::zeros(),
-            Carrier::Rail(r) => end.rail_axis * scratch.rails[r].rate,
+            Carrier::Rail(r) => cast3::<S>(&end.rail_axis) * scratch.rails[r].rate,
             Carrier::Floating(f) => {
                 let body = &scratch.floating[f];
                 body.velocity + body.omega.cross(&(at - body.origin))
@@ -458,20 +468,23 @@ impl RootedPlan {
 
     /// World rotation of an end's attach frame (`None`: the identity).
     #[inline(always)]
-    fn end_rotation(end: &IsolatorEnd, scratch: &RootedScratch) -> Option<Matrix3<f64>> {
+    fn end_rotation<S: Scalar>(
+        end: &IsolatorEnd,
+        scratch: &RootedScratch<S>,
+    ) -> Option<Matrix3<S>> {
         match end.carrier {
-            Carrier::World | Carrier::Rail(_) => end.attach,
+            Carrier::World | Carrier::Rail(_) => cast_rotation(&end.attach),
             Carrier::Floating(f) => {
                 let rotation = scratch.floating[f].rotation;
                 Some(match &end.attach {
-                    Some(attach) => rotation * attach,
+                    Some(attach) => rotation * cast33::<S>(attach),
                     None => rotation,
                 })
             }
         }
     }
 
-    fn end_omega(end: &IsolatorEnd, scratch: &RootedScratch) -> Vector3<f64> {
+    fn end_omega<S: Scalar>(end: &IsolatorEnd, scratch: &RootedScratch<S>) -> Vector3<S> {
         match end.carrier {
             Carrier::Floating(f) => scratch.floating[f].omega,
             _ => Vector3::zeros(),
@@ -480,16 +493,18 @@ impl RootedPlan {
 
     /// A force (at world point `at`) and torque on an end's carrier.
     #[inline(always)]
-    fn load(
+    fn load<S: Scalar>(
         end: &IsolatorEnd,
-        at: &Vector3<f64>,
-        force: &Vector3<f64>,
-        torque: &Vector3<f64>,
-        scratch: &mut RootedScratch,
+        at: &Vector3<S>,
+        force: &Vector3<S>,
+        torque: &Vector3<S>,
+        scratch: &mut RootedScratch<S>,
     ) {
         match end.carrier {
             Carrier::World => {}
-            Carrier::Rail(r) => scratch.rails[r].force += end.rail_axis.dot(force),
+            Carrier::Rail(r) => {
+                scratch.rails[r].force += cast3::<S>(&end.rail_axis).dot(force);
+            }
             Carrier::Floating(f) => {
                 let body = &mut scratch.floating[f];
                 body.force += force;
@@ -498,9 +513,8 @@ impl RootedPlan {
         }
     }
 
-    /// Bushing wrenches (see the general path for the conventions: deflection
-    /// of the child attach frame in the parent's attach axes).
-    fn isolator_forces(&self, model: &Model, scratch: &mut RootedScratch) {
+    /// Bushing wrenches (the law and its conventions: [`bushing_wrench`]).
+    fn isolator_forces<S: Scalar>(&self, model: &Model, scratch: &mut RootedScratch<S>) {
         for (k, (isolator, element)) in self.isolators.iter().zip(&model.isolators).enumerate() {
             let (parent, child) = (&isolator.parent, &isolator.child);
             let parent_rotation = Self::end_rotation(parent, scratch);
@@ -508,50 +522,44 @@ impl RootedPlan {
             let child_point = Self::end_point(child, scratch);
             let child_velocity = Self::carrier_velocity(child, &child_point, scratch);
             let parent_velocity = Self::carrier_velocity(parent, &child_point, scratch);
-            let translation = to_local(&parent_rotation, child_point - parent_point);
-            let translation_rate = to_local(&parent_rotation, child_velocity - parent_velocity);
             let (rotation, rotation_rate) = match isolator.relative_rotation {
-                RelativeRotation::Constant(rotation) => (rotation, Vector3::zeros()),
+                RelativeRotation::Constant(rotation) => (cast3::<S>(&rotation), Vector3::zeros()),
                 RelativeRotation::SameAs(earlier) => scratch.relative[earlier],
                 RelativeRotation::Computed => {
-                    let child_rotation = Self::end_rotation(child, scratch);
-                    let relative =
-                        compose(&parent_rotation.map(|m| m.transpose()), &child_rotation);
-                    let rotation = relative.map_or(Vector3::zeros(), |r| rotation_log(&r));
-                    let rate = to_local(
+                    let relative = relative_rotation(
                         &parent_rotation,
-                        Self::end_omega(child, scratch) - Self::end_omega(parent, scratch),
+                        &Self::end_rotation(child, scratch),
+                        Self::end_omega(parent, scratch),
+                        Self::end_omega(child, scratch),
                     );
-                    scratch.relative[k] = (rotation, rate);
-                    (rotation, rate)
+                    scratch.relative[k] = relative;
+                    relative
                 }
             };
-            let (stiffness, damping) = (&element.stiffness, &element.damping);
-            // The bushing law on three attach axes from `first`, in the world.
-            let law = |first: usize, deflection: &Vector3<f64>, rate: &Vector3<f64>| {
-                to_world(
-                    &parent_rotation,
-                    Vector3::from_fn(|i, _| {
-                        bushing_force(
-                            stiffness[first + i],
-                            damping[first + i],
-                            deflection[i],
-                            rate[i],
-                        )
-                    }),
-                )
-            };
-            let force = law(0, &translation, &translation_rate);
-            let torque = law(3, &rotation, &rotation_rate);
-            Self::load(child, &child_point, &force, &torque, scratch);
-            Self::load(parent, &child_point, &-force, &-torque, scratch);
+            let wrench = bushing_wrench(
+                &element.stiffness,
+                &element.damping,
+                &parent_rotation,
+                child_point - parent_point,
+                child_velocity - parent_velocity,
+                rotation,
+                rotation_rate,
+            );
+            Self::load(child, &child_point, &wrench.force, &wrench.torque, scratch);
+            Self::load(
+                parent,
+                &child_point,
+                &-wrench.force,
+                &-wrench.torque,
+                scratch,
+            );
         }
     }
 
     /// Coordinate and rate of a point-and-axis element; for floating bodies
     /// also the lever arm from the body origin.
     #[inline(always)]
-    fn reading(point: &PointOnBody, scratch: &RootedScratch) -> (f64, f64, Vector3<f64>) {
+    fn reading<S: Scalar>(point: &PointOnBody, scratch: &RootedScratch<S>) -> (S, S, Vector3<S>) {
         match point {
             PointOnBody::Rail {
                 body,
@@ -559,8 +567,9 @@ impl RootedPlan {
                 offset,
             } => {
                 let rail = &scratch.rails[*body];
+                let along = S::constant(*along);
                 (
-                    offset + along * rail.position,
+                    S::constant(*offset) + along * rail.position,
                     along * rail.rate,
                     Vector3::zeros(),
                 )
@@ -572,10 +581,11 @@ impl RootedPlan {
                 zero_offset,
             } => {
                 let state = &scratch.floating[*body];
-                let arm = state.rotation * point;
+                let arm = state.rotation * cast3::<S>(point);
+                let axis = cast3::<S>(axis);
                 (
-                    (state.origin + arm).dot(axis) - zero_offset,
-                    (state.velocity + state.omega.cross(&arm)).dot(axis),
+                    (state.origin + arm).dot(&axis) - S::constant(*zero_offset),
+                    (state.velocity + state.omega.cross(&arm)).dot(&axis),
                     arm,
                 )
             }
@@ -584,12 +594,19 @@ impl RootedPlan {
 
     /// A force along a point element's axis, applied at its point.
     #[inline(always)]
-    fn push(point: &PointOnBody, arm: &Vector3<f64>, force: f64, scratch: &mut RootedScratch) {
+    fn push<S: Scalar>(
+        point: &PointOnBody,
+        arm: &Vector3<S>,
+        force: S,
+        scratch: &mut RootedScratch<S>,
+    ) {
         match point {
-            PointOnBody::Rail { body, along, .. } => scratch.rails[*body].force += along * force,
+            PointOnBody::Rail { body, along, .. } => {
+                scratch.rails[*body].force += S::constant(*along) * force;
+            }
             PointOnBody::Floating { body, axis, .. } => {
                 let state = &mut scratch.floating[*body];
-                let force = axis * force;
+                let force = cast3::<S>(axis) * force;
                 state.force += force;
                 state.moment += arm.cross(&force);
             }
@@ -597,15 +614,21 @@ impl RootedPlan {
     }
 
     /// Sensor readings, the servo law and the actuator forces.
-    fn servo(&self, model: &Model, x: &[f64], inputs: &Inputs, ws: &mut Workspace) {
+    fn servo<S: Scalar>(
+        &self,
+        model: &Model,
+        x: &[S],
+        inputs: &InputValues<S>,
+        ws: &mut Workspace<S>,
+    ) {
         for (k, sensor) in self.sensors.iter().enumerate() {
             let (position, velocity, _) = Self::reading(sensor, &ws.rooted);
             ws.elements.sensor_position[k] = position;
             ws.elements.sensor_velocity[k] = velocity;
         }
-        servo_force(model, x, &inputs.values(), &mut ws.elements);
+        servo_forces(model, x, inputs, &mut ws.elements);
         for (actuator, force) in self.actuators.iter().zip(&ws.elements.actuator_force) {
-            if *force != 0.0 {
+            if !force.is_exactly_zero() {
                 let (_, _, arm) = Self::reading(actuator, &ws.rooted);
                 Self::push(actuator, &arm, *force, &mut ws.rooted);
             }
@@ -613,40 +636,40 @@ impl RootedPlan {
     }
 
     /// LuGre forces and bristle rates.
-    fn friction_forces(
+    fn friction_forces<S: Scalar>(
         &self,
         model: &Model,
-        x: &[f64],
-        inputs: &Inputs,
-        dx: &mut [f64],
-        scratch: &mut RootedScratch,
+        x: &[S],
+        inputs: &InputValues<S>,
+        dx: &mut [S],
+        scratch: &mut RootedScratch<S>,
     ) {
         for (contact, friction) in self.frictions.iter().zip(&model.frictions) {
             let (_, velocity, arm) = Self::reading(contact, scratch);
             let slip = velocity - inputs.platform_velocity;
-            let (force, z_rate) = friction.lugre.force_and_z_rate(slip, x[friction.z_index]);
+            let (force, z_rate) = friction
+                .lugre
+                .force_and_z_rate_of(slip, x[friction.z_index]);
             dx[friction.z_index] = z_rate;
             Self::push(contact, &arm, -force, scratch);
         }
     }
 
     /// Newton-Euler for each floating body, the rail law for each rail body.
-    fn accelerations(&self, dx: &mut [f64], scratch: &RootedScratch) {
+    fn accelerations<S: Scalar>(&self, dx: &mut [S], scratch: &RootedScratch<S>) {
+        let gravity = cast3::<S>(&self.gravity);
         for (body, state) in self.floating.iter().zip(&scratch.floating) {
-            let rotation = &state.rotation;
-            let omega = state.omega;
-            let arm = rotation * body.com;
-            // Moment about the centre of mass (gravity has none there) and
-            // the gyroscopic term, in body axes.
-            let moment = rotation.tr_mul(&(state.moment - arm.cross(&state.force)));
-            let omega_body = rotation.tr_mul(&omega);
-            let spin = omega_body.cross(&(body.inertia * omega_body));
-            let alpha = rotation * (body.inverse_inertia * (moment - spin));
-            let accel = state.force * body.inverse_mass + self.gravity
-                - alpha.cross(&arm)
-                - omega.cross(&omega.cross(&arm));
-            let accel = to_local(&body.joint_rotation, accel);
-            let alpha = to_local(&body.joint_rotation, alpha);
+            let (accel, alpha) = newton_euler(
+                &body.mass_properties,
+                &state.rotation,
+                state.omega,
+                state.force,
+                state.moment,
+                gravity,
+            );
+            let joint = cast_rotation::<S>(&body.joint_rotation);
+            let accel = rotate_back(&joint, accel);
+            let alpha = rotate_back(&joint, alpha);
             let v0 = body.v0;
             dx[v0] = accel.x;
             dx[v0 + 1] = accel.y;
@@ -656,28 +679,8 @@ impl RootedPlan {
             dx[v0 + 5] = alpha.z;
         }
         for (body, state) in self.rails.iter().zip(&scratch.rails) {
-            dx[body.v0] = state.force * body.inverse_mass + body.gravity_along;
+            dx[body.v0] =
+                state.force * S::constant(body.inverse_mass) + S::constant(body.gravity_along);
         }
     }
-}
-
-/// The rotation matrix of the quaternion (w, i, j, k), normalised on the way
-/// (the scale 2 / |q|^2 makes it exact for any length).
-#[inline(always)]
-fn quaternion_rotation(w: f64, i: f64, j: f64, k: f64) -> Matrix3<f64> {
-    let s = 2.0 / (w * w + i * i + j * j + k * k);
-    let (wi, wj, wk) = (s * w * i, s * w * j, s * w * k);
-    let (ii, ij, ik) = (s * i * i, s * i * j, s * i * k);
-    let (jj, jk, kk) = (s * j * j, s * j * k, s * k * k);
-    Matrix3::new(
-        1.0 - (jj + kk),
-        ij - wk,
-        ik + wj,
-        ij + wk,
-        1.0 - (ii + kk),
-        jk - wi,
-        ik - wj,
-        jk + wi,
-        1.0 - (ii + jj),
-    )
 }

@@ -12,6 +12,10 @@ pub trait Scalar: RealField + Copy {
     fn value(self) -> f64;
     /// A constant (zero derivative).
     fn constant(value: f64) -> Self;
+    /// Zero with zero derivative: a term that may be skipped without
+    /// changing the value or the derivative. (Comparisons of dual numbers
+    /// read the real part only, so `x == 0` is not this.)
+    fn is_exactly_zero(self) -> bool;
 }
 
 impl Scalar for f64 {
@@ -23,6 +27,10 @@ impl Scalar for f64 {
     fn constant(value: f64) -> Self {
         value
     }
+    #[inline]
+    fn is_exactly_zero(self) -> bool {
+        self == 0.0
+    }
 }
 
 impl Scalar for Dual64 {
@@ -33,6 +41,10 @@ impl Scalar for Dual64 {
     #[inline]
     fn constant(value: f64) -> Self {
         Dual64::from_re(value)
+    }
+    #[inline]
+    fn is_exactly_zero(self) -> bool {
+        self.re == 0.0 && self.eps == 0.0
     }
 }
 

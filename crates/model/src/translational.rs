@@ -7,8 +7,10 @@
 //! are the same functions both paths call. A test checks that both paths give
 //! the same state derivative.
 
-use crate::dynamics::{Workspace, bushing_force};
+use crate::dynamics::{InputValues, Workspace};
+use crate::laws::bushing_force;
 use crate::model::{Inputs, Model};
+use crate::scalar::Scalar;
 
 /// Constant Jacobian rows of a translational model (row-major, `nv` per row).
 #[derive(Debug, Clone, PartialEq)]
@@ -112,32 +114,32 @@ impl TranslationalMap {
     /// generalized forces. Models with up to four
     /// degrees of freedom take a path whose row length is a compile-time
     /// constant (fully unrolled products); the arithmetic is the same.
-    pub(crate) fn rhs(
+    pub(crate) fn rhs<S: Scalar>(
         &self,
         model: &Model,
-        x: &[f64],
-        inputs: &Inputs,
-        dx: &mut [f64],
-        ws: &mut Workspace,
+        x: &[S],
+        inputs: &InputValues<S>,
+        dx: &mut [S],
+        ws: &mut Workspace<S>,
     ) {
         match self.nv {
-            1 => self.rhs_sized::<1>(model, x, inputs, dx, ws),
-            2 => self.rhs_sized::<2>(model, x, inputs, dx, ws),
-            3 => self.rhs_sized::<3>(model, x, inputs, dx, ws),
-            4 => self.rhs_sized::<4>(model, x, inputs, dx, ws),
-            _ => self.rhs_sized::<DYNAMIC>(model, x, inputs, dx, ws),
+            1 => self.rhs_sized::<1, S>(model, x, inputs, dx, ws),
+            2 => self.rhs_sized::<2, S>(model, x, inputs, dx, ws),
+            3 => self.rhs_sized::<3, S>(model, x, inputs, dx, ws),
+            4 => self.rhs_sized::<4, S>(model, x, inputs, dx, ws),
+            _ => self.rhs_sized::<DYNAMIC, S>(model, x, inputs, dx, ws),
         }
     }
 
     /// [`Self::rhs`] with rows of `N` entries (`N` = [`DYNAMIC`]: `nv`).
     #[inline(always)]
-    fn rhs_sized<const N: usize>(
+    fn rhs_sized<const N: usize, S: Scalar>(
         &self,
         model: &Model,
-        x: &[f64],
-        inputs: &Inputs,
-        dx: &mut [f64],
-        ws: &mut Workspace,
+        x: &[S],
+        inputs: &InputValues<S>,
+        dx: &mut [S],
+        ws: &mut Workspace<S>,
     ) {
         let nv = row_length::<N>(self.nv);
         let nq = model.layout.nq;
@@ -145,28 +147,31 @@ impl TranslationalMap {
         let (q, v) = (&q[..nv], &v[..nv]);
         dx[..nq].copy_from_slice(v);
         let force = &mut ws.generalized[..nv];
-        force.copy_from_slice(&self.gravity[..nv]);
+        for (f, g) in force.iter_mut().zip(&self.gravity[..nv]) {
+            *f = S::constant(*g);
+        }
         for &(stiffness, damping, offset, start) in &self.isolator_axes {
             let row = &self.isolator_rows[start..start + nv];
-            let f = bushing_force(stiffness, damping, offset + dot(row, q), dot(row, v));
+            let deflection = S::constant(offset) + dot(row, q);
+            let f = bushing_force(stiffness, damping, deflection, dot(row, v));
             axpy(f, row, force);
         }
         let command = match &model.controller {
             Some(controller) => {
                 let sensor = row::<N>(&self.sensor_rows, nv, controller.sensor);
-                let integral = controller.integral_index.map_or(0.0, |i| x[i]);
+                let integral = controller.integral_index.map_or(S::zero(), |i| x[i]);
                 let (f, error) = controller.law(
-                    self.sensor_offsets[controller.sensor] + dot(sensor, q),
+                    S::constant(self.sensor_offsets[controller.sensor]) + dot(sensor, q),
                     dot(sensor, v),
                     integral,
-                    &inputs.values(),
+                    inputs,
                 );
                 if let Some(index) = controller.integral_index {
                     dx[index] = error;
                 }
                 f
             }
-            None => 0.0,
+            None => S::zero(),
         };
         if let Some(a) = model.servo_actuator() {
             let actuator = row::<N>(&self.actuator_rows, nv, a);
@@ -180,7 +185,9 @@ impl TranslationalMap {
         // everything else is summed by the time it is ready.
         for (k, friction) in model.frictions.iter().enumerate() {
             let slip = dot(row::<N>(&self.friction_rows, nv, k), v) - inputs.platform_velocity;
-            let (f, z_rate) = friction.lugre.force_and_z_rate(slip, x[friction.z_index]);
+            let (f, z_rate) = friction
+                .lugre
+                .force_and_z_rate_of(slip, x[friction.z_index]);
             let column = row::<N>(&self.friction_accelerations, nv, k);
             axpy(-f, column, &mut dx[nq..nq + nv]);
             dx[friction.z_index] = z_rate;
@@ -209,22 +216,22 @@ fn row<const N: usize>(table: &[f64], nv: usize, k: usize) -> &[f64] {
 /// operands compile to fewer instructions than iterator chains for the
 /// handful of entries these rows have).
 #[inline(always)]
-fn dot(a: &[f64], b: &[f64]) -> f64 {
+fn dot<S: Scalar>(a: &[f64], b: &[S]) -> S {
     let b = &b[..a.len()];
     // -0.0 is the exact additive identity (+0.0 is not, for -0.0), so the
     // compiler drops the first addition.
-    let mut sum = -0.0;
+    let mut sum = S::constant(-0.0);
     for i in 0..a.len() {
-        sum += a[i] * b[i];
+        sum += b[i] * S::constant(a[i]);
     }
     sum
 }
 
 /// `y += alpha x` over `x`'s length.
 #[inline(always)]
-fn axpy(alpha: f64, x: &[f64], y: &mut [f64]) {
+fn axpy<S: Scalar>(alpha: S, x: &[f64], y: &mut [S]) {
     let y = &mut y[..x.len()];
     for i in 0..x.len() {
-        y[i] += alpha * x[i];
+        y[i] += alpha * S::constant(x[i]);
     }
 }

@@ -1,0 +1,119 @@
+//! The one evaluator of a model's right-hand side. Which way it evaluates is
+//! decided once, in [`Evaluator::choose`], when the model is built; the
+//! simulation ([`crate::Model::rhs`]) and the linearisation
+//! ([`crate::Model::jacobian`], dual numbers) both go through
+//! [`Evaluator::rhs`], so equilibria and eigenvalues are those of the very
+//! code that is integrated. Every way gives the state derivative of the
+//! general recursive dynamics up to round-off (tests hold them to it at
+//! random states).
+
+use nalgebra::DMatrix;
+
+use crate::dynamics::{EvaluationPath, InputValues, Workspace};
+use crate::model::Model;
+use crate::rooted::RootedPlan;
+use crate::scalar::Scalar;
+use crate::translational::TranslationalMap;
+
+/// How a model's right-hand side is evaluated.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum Evaluator {
+    /// No joint rotates a body: constant Jacobian rows and inverse mass matrix.
+    ConstantJacobian(TranslationalMap),
+    /// Every body jointed straight to the world: free bodies and rail masses.
+    RootedBodies(RootedPlan),
+    /// Bodies in chains: recursive kinematics and a backward pass.
+    General,
+}
+
+impl Evaluator {
+    /// The cheapest exact evaluation for the model's structure, given the
+    /// inverse of its mass matrix at the zero configuration.
+    pub(crate) fn choose(model: &Model, mass_inverse: &DMatrix<f64>) -> Self {
+        if model.bodies.iter().all(|b| !b.joint.motion.rotates()) {
+            return Self::ConstantJacobian(TranslationalMap::build(model, mass_inverse));
+        }
+        match RootedPlan::build(model) {
+            Some(plan) => Self::RootedBodies(plan),
+            None => Self::General,
+        }
+    }
+
+    /// Which way this is.
+    pub(crate) fn path(&self) -> EvaluationPath {
+        match self {
+            Self::ConstantJacobian(_) => EvaluationPath::ConstantJacobian,
+            Self::RootedBodies(_) => EvaluationPath::RootedBodies,
+            Self::General => EvaluationPath::General,
+        }
+    }
+
+    /// The state derivative, in any scalar type.
+    #[inline]
+    pub(crate) fn rhs<S: Scalar>(
+        &self,
+        model: &Model,
+        x: &[S],
+        inputs: &InputValues<S>,
+        dx: &mut [S],
+        ws: &mut Workspace<S>,
+    ) {
+        match self {
+            Self::ConstantJacobian(map) => map.rhs(model, x, inputs, dx, ws),
+            Self::RootedBodies(plan) => plan.rhs(model, x, inputs, dx, ws),
+            Self::General => model.rhs_general(x, inputs, dx, ws),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::{Dual64, Inputs, load};
+
+    /// The exact Jacobian through the chosen evaluation equals the one
+    /// through the general dynamics.
+    #[test]
+    fn jacobian_of_the_chosen_path_equals_the_general_one() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        for scenario in [
+            "scenarios/coupling/friction20_traverse.toml",
+            "scenarios/paper/fig05b_fi.toml",
+        ] {
+            let loaded = load(&root.join(scenario)).expect("loads");
+            let model = &loaded.model;
+            let n = model.n_states();
+            let mut x = model.zero_state();
+            for (i, v) in x.iter_mut().enumerate() {
+                *v += 1e-6 * ((i * 7 % 11) as f64 - 5.0);
+            }
+            let inputs = Inputs {
+                platform_velocity: 0.02,
+                servo_force: 0.3,
+                ..Inputs::default()
+            };
+            let chosen = model.jacobian(&x, &inputs);
+            let u = inputs.values::<Dual64>();
+            let mut ws = model.workspace_of::<Dual64>();
+            let mut xd: Vec<Dual64> = x.iter().map(|v| Dual64::from_re(*v)).collect();
+            let mut dx = vec![Dual64::from_re(0.0); n];
+            let mut worst: f64 = 0.0;
+            for col in 0..n {
+                xd[col].eps = 1.0;
+                model.rhs_general(&xd, &u, &mut dx, &mut ws);
+                for row in 0..n {
+                    let scale = chosen[(row, col)].abs().max(dx[row].eps.abs()).max(1.0);
+                    worst = worst.max((chosen[(row, col)] - dx[row].eps).abs() / scale);
+                    assert!(
+                        (chosen[(row, col)] - dx[row].eps).abs() <= 1e-9 * scale,
+                        "{scenario}: d{}/d{}: {} vs {}",
+                        model.layout.names[row],
+                        model.layout.names[col],
+                        chosen[(row, col)],
+                        dx[row].eps
+                    );
+                }
+                xd[col].eps = 0.0;
+            }
+        }
+    }
+}
