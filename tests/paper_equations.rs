@@ -29,9 +29,9 @@ fn fi_stage_matches_paper_eq2() {
     ] {
         let loaded = load(file);
         let model = &loaded.model;
-        let controller = model.controller.clone().expect("controller");
+        let controller = model.controller().expect("controller");
         let lugre = LugreParams::paper_table1();
-        let names = &model.layout.names;
+        let names = &model.layout().names;
         let index = |n: &str| {
             names
                 .iter()
@@ -116,12 +116,12 @@ fn rigid_stage_matches_paper_eq3() {
     let loaded = load("scenarios/paper/fig05b_rigid.toml");
     let model = &loaded.model;
     assert_eq!(
-        model.bodies.len(),
+        model.bodies().len(),
         1,
         "bearing must be merged into the table"
     );
-    assert!((model.bodies[0].mass - (M_T + M_B)).abs() < 1e-12);
-    let controller = model.controller.clone().expect("controller");
+    assert!((model.bodies()[0].mass - (M_T + M_B)).abs() < 1e-12);
+    let controller = model.controller().expect("controller");
     let lugre = LugreParams::paper_table1();
     let mut ws = model.workspace();
     let mut rng = SplitMix(11);

@@ -15,7 +15,7 @@ fn energy_never_increases_without_servo() {
     let mut scenario = loaded.scenario.clone();
     scenario.controller = None;
     let (_, model) = assemble(loaded.robot.clone(), &scenario).unwrap();
-    let names = &model.layout.names;
+    let names = &model.layout().names;
     let index = |n: &str| names.iter().position(|s| s == n).unwrap();
     let mut rng = SplitMix(3);
     for _ in 0..4 {
@@ -112,7 +112,7 @@ fn two_level_prismatic_tree_matches_modal_solution() {
         TWO_LEVEL,
         "robot = \"x\"\nduration = 1.0\ngravity = [0, 0, -9.81]\n",
     );
-    assert_eq!(model.layout.names[..2], ["carriage_x.q", "slider_x.q"]);
+    assert_eq!(model.layout().names[..2], ["carriage_x.q", "slider_x.q"]);
     let (m1, m2, k1, k2): (f64, f64, f64, f64) = (2.0, 0.5, 800.0, 200.0);
     // Modes of [[k1 + k2, -k2], [-k2, k2]] against diag(m1, m2).
     let a = m1 * m2;
@@ -215,8 +215,8 @@ const MERGED: &str = r#"<robot name="merged" xmlns:fistage="urn:fistage:urdf:1">
 #[test]
 fn fixed_joints_merge_inertia_correctly() {
     let model = model_from(MERGED, "robot = \"x\"\nduration = 1.0\n");
-    assert_eq!(model.bodies.len(), 1);
-    let body = &model.bodies[0];
+    assert_eq!(model.bodies().len(), 1);
+    let body = &model.bodies()[0];
     assert_eq!(body.links, ["base", "bracket", "tip"]);
     // Centres of mass in the base frame: base (0.1, 0, 0), bracket (0.2, 0.05, 0), tip (0.2, 0.3, 0).
     let parts = [(1.0, [0.1, 0.0]), (2.0, [0.2, 0.05]), (0.5, [0.2, 0.3])];

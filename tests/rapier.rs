@@ -86,9 +86,9 @@ fn four_bearing_stage_statistics_agree() {
 
 /// World angular momentum about the centre of mass, from the state.
 fn momentum(model: &fistage_model::Model, x: &[f64]) -> Vector3<f64> {
-    let body = &model.bodies[0];
+    let body = &model.bodies()[0];
     let rotation = model.body_poses(x)[0].0;
-    let nq = model.layout.nq;
+    let nq = model.layout().nq;
     let omega = body.joint.origin_rotation * Vector3::new(x[nq + 3], x[nq + 4], x[nq + 5]);
     let inertia: Matrix3<f64> = rotation * body.inertia * rotation.transpose();
     inertia * omega
@@ -100,7 +100,7 @@ fn tumbling_body_conserves_momentum_and_agrees_with_native() {
         FREE_BODY,
         "robot = \"x\"\nduration = 1\ngravity = [0, 0, 0]\n",
     );
-    let nq = model.layout.nq;
+    let nq = model.layout().nq;
     let mut x0 = model.zero_state();
     x0[nq..nq + 6].copy_from_slice(&[0.01, -0.02, 0.03, 3.0, -7.0, 5.0]);
     let still = still();
@@ -279,10 +279,10 @@ fn moving_free_root_with_a_jointed_child_follows_native() {
         CARRIER,
         "robot = \"x\"\nduration = 1\ngravity = [0, 0, 0]\n",
     );
-    let nq = model.layout.nq;
+    let nq = model.layout().nq;
     let mut x0 = model.zero_state();
-    let slide = model.layout.index("slide.q").expect("slide.q");
-    let slide_rate = model.layout.index("slide.v").expect("slide.v");
+    let slide = model.layout().index("slide.q").expect("slide.q");
+    let slide_rate = model.layout().index("slide.v").expect("slide.v");
     x0[slide] = 0.01;
     x0[slide_rate] = 0.05;
     x0[nq..nq + 6].copy_from_slice(&[0.1, 0.02, -0.03, 0.3, -0.2, 0.5]);

@@ -139,10 +139,10 @@ fn free_body() -> Model {
 
 /// World angular momentum about the centre of mass and kinetic energy of the free body.
 fn momentum_and_energy(model: &Model, x: &[f64]) -> (Vector3<f64>, f64) {
-    let body = &model.bodies[0];
+    let body = &model.bodies()[0];
     let poses = model.body_poses(x);
     let rotation = poses[0].0;
-    let nq = model.layout.nq;
+    let nq = model.layout().nq;
     // Velocities are in the joint frame; the joint frame's rotation is the joint origin's.
     let joint = body.joint.origin_rotation;
     let omega = joint * Vector3::new(x[nq + 3], x[nq + 4], x[nq + 5]);
@@ -161,7 +161,7 @@ fn momentum_and_energy(model: &Model, x: &[f64]) -> (Vector3<f64>, f64) {
 #[test]
 fn torque_free_tumbling_conserves_momentum_and_energy() {
     let model = free_body();
-    let nq = model.layout.nq;
+    let nq = model.layout().nq;
     let mut x0 = model.zero_state();
     x0[nq..nq + 6].copy_from_slice(&[0.01, -0.02, 0.03, 3.0, -7.0, 5.0]);
     let settings = SimSettings {
@@ -205,8 +205,8 @@ fn torque_free_tumbling_conserves_momentum_and_energy() {
 #[test]
 fn free_body_under_known_force_and_torque() {
     let model = free_body();
-    let nq = model.layout.nq;
-    let body = &model.bodies[0];
+    let nq = model.layout().nq;
+    let body = &model.bodies()[0];
     let mut rng = SplitMix(5);
     for _ in 0..10 {
         // A random attitude, at rest.
@@ -226,7 +226,7 @@ fn free_body_under_known_force_and_torque() {
         model.rhs(&x, &inputs, &mut dx, &mut ws);
         let poses = model.body_poses(&x);
         let (rotation, origin) = poses[0];
-        let actuator = &model.actuators[0];
+        let actuator = &model.actuators()[0];
         let force = actuator.axis * inputs.servo_force;
         let r_force = rotation * actuator.point;
         let r_com = rotation * body.com;
@@ -266,7 +266,7 @@ fn jacobian_matches_central_differences() {
         let model = &loaded.model;
         for _ in 0..3 {
             let mut x = model.zero_state();
-            for (i, kind) in model.layout.kinds.iter().enumerate() {
+            for (i, kind) in model.layout().kinds.iter().enumerate() {
                 use fistage_model::StateKind::*;
                 x[i] = match kind {
                     Translation => rng.range(-1e-4, 1e-4),
@@ -278,7 +278,7 @@ fn jacobian_matches_central_differences() {
                     ErrorIntegral => rng.range(-1e-5, 1e-5),
                 };
             }
-            if let Some(q0) = model.layout.index("table.qw") {
+            if let Some(q0) = model.layout().index("table.qw") {
                 let q = UnitQuaternion::from_euler_angles(0.01, -0.02, 0.03);
                 x[q0..q0 + 4].copy_from_slice(&[q.w, q.i, q.j, q.k]);
             }
@@ -291,7 +291,7 @@ fn jacobian_matches_central_differences() {
             let n = model.n_states();
             let (mut plus, mut minus) = (vec![0.0; n], vec![0.0; n]);
             for col in 0..n {
-                let h = 1e-6 * model.layout.nominal[col];
+                let h = 1e-6 * model.layout().nominal[col];
                 let mut xp = x.clone();
                 xp[col] += h;
                 let mut xm = x.clone();
@@ -304,8 +304,8 @@ fn jacobian_matches_central_differences() {
                     assert!(
                         (exact[(row, col)] - numeric).abs() <= scale,
                         "{file}: d {} / d {}: dual {} vs central {numeric}",
-                        model.layout.names[row],
-                        model.layout.names[col],
+                        model.layout().names[row],
+                        model.layout().names[col],
                         exact[(row, col)]
                     );
                 }
@@ -407,7 +407,7 @@ fn rooted_fast_path_matches_the_general_dynamics() {
         let (mut fast, mut general) = (vec![0.0; n], vec![0.0; n]);
         for _ in 0..300 {
             let x: Vec<f64> = model
-                .layout
+                .layout()
                 .kinds
                 .iter()
                 .map(|kind| match kind {
@@ -429,7 +429,7 @@ fn rooted_fast_path_matches_the_general_dynamics() {
             model.rhs(&x, &inputs, &mut fast, &mut ws);
             model.rhs_general(&x, &inputs.values(), &mut general, &mut ws);
             // Round-off of an entry scales with the largest entry of its kind.
-            let kinds = &model.layout.kinds;
+            let kinds = &model.layout().kinds;
             let scale = |kind: StateKind| {
                 general
                     .iter()
@@ -441,7 +441,7 @@ fn rooted_fast_path_matches_the_general_dynamics() {
                 assert!(
                     (a - b).abs() <= 1e-10 * a.abs().max(b.abs()) + 1e-13 * scale(kinds[i]),
                     "{}: fast path {a} vs general {b}",
-                    model.layout.names[i]
+                    model.layout().names[i]
                 );
             }
         }

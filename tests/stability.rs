@@ -44,7 +44,7 @@ fn corrected_routh_hurwitz_equals_eigenvalues() {
                 )
                 .expect("modes");
                 let test = rigid_slipping(&RigidStage {
-                    mass: model.bodies[0].mass,
+                    mass: model.bodies()[0].mass,
                     k,
                     c,
                     lugre: LugreParams::paper_table1(),

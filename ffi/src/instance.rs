@@ -156,7 +156,7 @@ pub struct Instance {
 impl std::fmt::Debug for Instance {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Instance")
-            .field("model", &self.model.name)
+            .field("model", &self.model.name())
             .field("phase", &self.phase)
             .finish_non_exhaustive()
     }
@@ -191,7 +191,7 @@ impl Instance {
         }
         let variables = variables(&model, &source.scenario);
         let values = start_values(&variables);
-        let n_outputs = model.signals.len();
+        let n_outputs = model.signals().len();
         Ok(Self {
             workspace: model.workspace(),
             guid: own_guid,
@@ -437,7 +437,7 @@ impl Instance {
         if let Some(i) = self.outputs.iter().position(|v| !v.is_finite()) {
             return Err(CallError::Simulation(format!(
                 "output \"{}\" is not finite",
-                self.model.signals[i].name
+                self.model.signals()[i].name
             )));
         }
         self.outputs_valid = true;

@@ -160,7 +160,7 @@ pub fn model_description(model: &Model, scenario: &Scenario, capabilities: Capab
     body.push_str("    </InitialUnknowns>\n  </ModelStructure>\n");
     let flag = |b: bool| if b { "true" } else { "false" };
     let title = if scenario.title.is_empty() {
-        model.name.clone()
+        model.name().to_string()
     } else {
         scenario.title.clone()
     };
@@ -173,7 +173,7 @@ pub fn model_description(model: &Model, scenario: &Scenario, capabilities: Capab
     };
     let head = format!(
         "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"{}\" description=\"{}\" generationTool=\"fistage {}\" variableNamingConvention=\"{convention}\" numberOfEventIndicators=\"0\"",
-        escape(&model.name),
+        escape(model.name()),
         escape(&title),
         env!("CARGO_PKG_VERSION"),
     );

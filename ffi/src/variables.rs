@@ -111,7 +111,7 @@ pub fn variables(model: &Model, scenario: &Scenario) -> Vec<Variable> {
             Binding::Input(index),
         );
     }
-    for (index, signal) in model.signals.iter().enumerate() {
+    for (index, signal) in model.signals().iter().enumerate() {
         push(
             signal.name.clone(),
             Causality::Output,

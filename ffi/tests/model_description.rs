@@ -66,7 +66,7 @@ fn check(relative: &str) -> String {
             other => panic!("{name}: causality {other:?}"),
         }
     }
-    assert_eq!(outputs.len(), loaded.model.signals.len());
+    assert_eq!(outputs.len(), loaded.model.signals().len());
     let listed: Vec<usize> = root
         .descendants()
         .find(|n| n.has_tag_name("Outputs"))
@@ -90,9 +90,9 @@ fn check(relative: &str) -> String {
             .parse()
             .expect("number")
     };
-    let controller = loaded.model.controller.as_ref().expect("controller");
+    let controller = loaded.model.controller().expect("controller");
     assert_eq!(start("controller.k"), controller.k);
-    for friction in &loaded.model.frictions {
+    for friction in loaded.model.frictions() {
         assert_eq!(
             start(&format!("{}.sigma0", friction.name)),
             friction.lugre.sigma0

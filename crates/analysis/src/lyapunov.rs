@@ -88,9 +88,9 @@ pub fn largest_lyapunov(
         return Err(LyapunovError::TimeVarying);
     }
     let model = &loaded.model;
-    let nominal = &model.layout.nominal;
+    let nominal = &model.layout().nominal;
     let movable: Vec<usize> = (0..model.n_states())
-        .filter(|&i| model.layout.kinds[i] != StateKind::Quaternion)
+        .filter(|&i| model.layout().kinds[i] != StateKind::Quaternion)
         .collect();
     let mut reference = advance(
         loaded,

@@ -100,8 +100,8 @@ pub struct ModalAnalysis {
 /// Readable names of the position coordinates in tangent order: floating
 /// joints as `<body>.x .y .z .roll .pitch .yaw`, others by body name.
 pub fn coordinate_names(model: &Model) -> Vec<String> {
-    let mut names = vec![String::new(); model.layout.nv];
-    for body in &model.bodies {
+    let mut names = vec![String::new(); model.layout().nv];
+    for body in model.bodies() {
         let v0 = body.joint.v_offset;
         match body.joint.motion {
             JointMotion::Floating => {
@@ -136,9 +136,9 @@ pub fn modal_analysis(
         .iter()
         .map(|n| {
             model
-                .layout
+                .layout()
                 .index(n)
-                .map_or(1e-3, |i| model.layout.nominal[i])
+                .map_or(1e-3, |i| model.layout().nominal[i])
         })
         .collect();
     let is_bristle: Vec<bool> = tangent

@@ -308,8 +308,8 @@ fn linear_verdict(loaded: &Loaded) -> Option<(bool, f64)> {
 fn sensor_peak_to_peak(loaded: &Loaded, duration: f64) -> Option<(f64, f64)> {
     let scenario = &loaded.scenario;
     let model = &loaded.model;
-    let sensor = model.controller.as_ref().map_or(0, |c| c.sensor);
-    model.sensors.get(sensor)?;
+    let sensor = model.controller().map_or(0, |c| c.sensor);
+    model.sensors().get(sensor)?;
     let excitation = ScenarioExcitation::from_scenario(scenario);
     let settings = SimSettings {
         t_end: duration,

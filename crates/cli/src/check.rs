@@ -18,22 +18,26 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     let loaded = fistage_model::load(&args.scenario)?;
     let model = &loaded.model;
     println!("{}: ok", args.scenario.display());
-    println!("robot {} ({})", model.name, loaded.scenario.robot.display());
+    println!(
+        "robot {} ({})",
+        model.name(),
+        loaded.scenario.robot.display()
+    );
     print_bodies(model);
     print_elements(model);
     println!("evaluation: {}", evaluation_path(model.evaluation_path()));
     println!("states ({}):", model.n_states());
     for ((name, kind), nominal) in model
-        .layout
+        .layout()
         .names
         .iter()
-        .zip(&model.layout.kinds)
-        .zip(&model.layout.nominal)
+        .zip(&model.layout().kinds)
+        .zip(&model.layout().nominal)
     {
         println!("  {name:<32} [{}]  nominal {nominal:.1e}", kind.unit());
     }
-    println!("signals ({}):", model.signals.len());
-    for signal in &model.signals {
+    println!("signals ({}):", model.signals().len());
+    for signal in model.signals() {
         println!("  {} [{}]", signal.name, signal.unit);
     }
     Ok(())
@@ -54,16 +58,16 @@ fn evaluation_path(path: EvaluationPath) -> &'static str {
 fn frame_name(model: &Model, frame: Frame) -> String {
     match frame {
         Frame::World => "world".into(),
-        Frame::Body(b) => model.bodies[b].name.clone(),
+        Frame::Body(b) => model.bodies()[b].name.clone(),
     }
 }
 
 fn print_bodies(model: &Model) {
-    println!("bodies ({}):", model.bodies.len());
-    for body in &model.bodies {
+    println!("bodies ({}):", model.bodies().len());
+    for body in model.bodies() {
         let parent = body
             .parent
-            .map_or("world".to_string(), |p| model.bodies[p].name.clone());
+            .map_or("world".to_string(), |p| model.bodies()[p].name.clone());
         let kind = match body.joint.motion {
             JointMotion::Prismatic { axis } => {
                 format!("prismatic [{:.3} {:.3} {:.3}]", axis.x, axis.y, axis.z)
@@ -87,7 +91,7 @@ fn print_bodies(model: &Model) {
 }
 
 fn print_elements(model: &Model) {
-    for isolator in &model.isolators {
+    for isolator in model.isolators() {
         println!(
             "  isolator {}: {} -> {}, stiffness {:?}, damping {:?}",
             isolator.name,
@@ -97,12 +101,12 @@ fn print_elements(model: &Model) {
             isolator.damping
         );
     }
-    for friction in &model.frictions {
+    for friction in model.frictions() {
         let p = &friction.lugre;
         println!(
             "  friction {} on {}: sigma0 {} sigma1 {} sigma2 {} f_c {} f_s {} v_s {}",
             friction.name,
-            model.bodies[friction.body].name,
+            model.bodies()[friction.body].name,
             p.sigma0,
             p.sigma1,
             p.sigma2,
@@ -111,22 +115,28 @@ fn print_elements(model: &Model) {
             p.v_s
         );
     }
-    for actuator in &model.actuators {
+    for actuator in model.actuators() {
         println!(
             "  actuator {} on {}",
-            actuator.name, model.bodies[actuator.body].name
+            actuator.name,
+            model.bodies()[actuator.body].name
         );
     }
-    for sensor in &model.sensors {
+    for sensor in model.sensors() {
         println!(
             "  sensor {} on {}",
-            sensor.name, model.bodies[sensor.body].name
+            sensor.name,
+            model.bodies()[sensor.body].name
         );
     }
-    if let Some(c) = &model.controller {
+    if let Some(c) = &model.controller() {
         println!(
             "  controller: {} -> {}, k {} c {} k_i {}",
-            model.sensors[c.sensor].name, model.actuators[c.actuator].name, c.k, c.c, c.k_i
+            model.sensors()[c.sensor].name,
+            model.actuators()[c.actuator].name,
+            c.k,
+            c.c,
+            c.k_i
         );
     }
 }

@@ -106,7 +106,7 @@ fn response_figure(loaded: &Loaded, table: &SignalTable) -> Figure {
     }
     let joints: Vec<_> = loaded
         .model
-        .bodies
+        .bodies()
         .iter()
         .flat_map(|body| {
             let name = &body.joint.name;
@@ -132,7 +132,7 @@ fn response_figure(loaded: &Loaded, table: &SignalTable) -> Figure {
             table,
             &forces_of(
                 table,
-                loaded.model.frictions.iter().map(|f| f.name.as_str()),
+                loaded.model.frictions().iter().map(|f| f.name.as_str()),
             ),
         ),
         force_panel(
@@ -140,7 +140,7 @@ fn response_figure(loaded: &Loaded, table: &SignalTable) -> Figure {
             table,
             &forces_of(
                 table,
-                loaded.model.actuators.iter().map(|a| a.name.as_str()),
+                loaded.model.actuators().iter().map(|a| a.name.as_str()),
             ),
         ),
     ];
@@ -166,7 +166,7 @@ pub fn figure_title(loaded: &Loaded) -> String {
 /// Velocity against position of the first sensor: the whole run, and the
 /// steady-state window drawn over it.
 fn phase_portrait(loaded: &Loaded, table: &SignalTable) -> Option<XyPlot> {
-    let sensor = loaded.model.sensors.first()?;
+    let sensor = loaded.model.sensors().first()?;
     let position = table.column(&format!("{}.position", sensor.name))?;
     let velocity = table.column(&format!("{}.velocity", sensor.name))?;
     let unit = length_unit(&[position]);

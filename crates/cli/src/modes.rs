@@ -197,7 +197,7 @@ fn body_points(loaded: &Loaded, state: &[f64]) -> Vec<Vec<Vector3<f64>>> {
     let poses = model.body_poses(state);
     let mut points: Vec<Vec<Vector3<f64>>> =
         poses.iter().map(|(_, origin)| vec![*origin]).collect();
-    for isolator in &model.isolators {
+    for isolator in model.isolators() {
         for (frame, local) in [
             (isolator.parent, isolator.parent_attach.translation.vector),
             (isolator.child, isolator.child_attach.translation.vector),
@@ -222,7 +222,7 @@ fn displacement(
 ) -> Vector3<f64> {
     let model = &loaded.model;
     let poses = model.body_poses(state);
-    let body = &model.bodies[index];
+    let body = &model.bodies()[index];
     let v0 = body.joint.v_offset;
     // Joint frame axes in the world (for root bodies the parent is the world).
     let parent_rotation = body
@@ -286,7 +286,7 @@ fn draw_dominant_shapes(
             0.0
         };
         let mut series = Vec::new();
-        for (b, body) in loaded.model.bodies.iter().enumerate() {
+        for (b, body) in loaded.model.bodies().iter().enumerate() {
             let at_rest = &points[b];
             let displaced: Vec<Vector3<f64>> = at_rest
                 .iter()
@@ -365,11 +365,9 @@ fn convex_ring(points: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
 fn print_routh_hurwitz(loaded: &Loaded, platform_velocity: f64) {
     use fistage_analysis::routh::{RigidStage, rigid_slipping};
     let model = &loaded.model;
-    let (Some(controller), [body], [friction]) = (
-        &model.controller,
-        model.bodies.as_slice(),
-        model.frictions.as_slice(),
-    ) else {
+    let (Some(controller), [body], [friction]) =
+        (model.controller(), model.bodies(), model.frictions())
+    else {
         return;
     };
     if !matches!(body.joint.motion, JointMotion::Prismatic { .. })

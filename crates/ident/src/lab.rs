@@ -122,20 +122,20 @@ impl LabStage {
             file: stage.source.clone(),
             message,
         };
-        let [friction] = model.frictions.as_slice() else {
+        let [friction] = model.frictions() else {
             return Err(problem(format!(
                 "the lab tests need a stage with exactly one friction contact, this one has {}",
-                model.frictions.len()
+                model.frictions().len()
             )));
         };
         // The scenario's servo names the sensor and actuator; else the first ones.
         let servo = stage.scenario.controller.as_ref();
         let sensor = servo
-            .and_then(|c| model.sensors.iter().find(|s| s.name == c.sensor))
-            .or(model.sensors.first());
+            .and_then(|c| model.sensors().iter().find(|s| s.name == c.sensor))
+            .or(model.sensors().first());
         let actuator = servo
-            .and_then(|c| model.actuators.iter().find(|a| a.name == c.actuator))
-            .or(model.actuators.first());
+            .and_then(|c| model.actuators().iter().find(|a| a.name == c.actuator))
+            .or(model.actuators().first());
         let (Some(sensor), Some(actuator)) = (sensor, actuator) else {
             return Err(problem(
                 "the lab tests need a sensor and an actuator (fistage:sensor, fistage:actuator)"
@@ -146,7 +146,7 @@ impl LabStage {
         stage.friction_name = friction.name.clone();
         stage.sensor = sensor.name.clone();
         stage.actuator = actuator.name.clone();
-        stage.mass = model.bodies.iter().map(|b| b.mass).sum();
+        stage.mass = model.bodies().iter().map(|b| b.mass).sum();
         Ok(stage)
     }
 

@@ -22,7 +22,7 @@ use crate::laws::{
     RigidBody, bushing_wrench, cast3, cast33, newton_euler, quaternion_rate, quaternion_rotation,
     relative_rotation, servo_forces,
 };
-use crate::model::{Frame, Inputs, JointMotion, Model};
+use crate::model::{Body, Frame, Inputs, JointMotion, Model};
 use crate::reference::ReferenceSample;
 use crate::rooted::RootedScratch;
 use crate::scalar::Scalar;
@@ -85,8 +85,6 @@ pub struct Workspace<S: Scalar = f64> {
     parallel: Vec<bool>,
     force: Vec<Vector3<S>>,
     moment: Vec<Vector3<S>>,
-    jacobian: Vec<(Vector3<S>, Vector3<S>)>,
-    mass: DMatrix<S>,
     tau: DVector<S>,
     block_mass: Vec<Vec<S>>,
     block_rhs: Vec<Vec<S>>,
@@ -165,8 +163,6 @@ impl Model {
             dof_angular,
             force: zeros(),
             moment: zeros(),
-            jacobian: Vec::with_capacity(nv),
-            mass: DMatrix::zeros(nv, nv),
             tau: DVector::zeros(nv),
             block_mass: self
                 .mass_blocks
@@ -849,10 +845,30 @@ fn fill_block_mass<S: Scalar>(
     out: &mut [S],
     kin: Kinematics<S>,
 ) {
-    let k = block.dofs.len();
+    fill_mass(
+        model,
+        &block.bodies,
+        block.dofs.len(),
+        |b| &b.chain_local,
+        out,
+        kin,
+    );
+}
+
+/// The mass matrix over some bodies, `sum m Jv^T Jv + Jw^T I Jw` from body
+/// Jacobians, row-major `k x k`; `local` numbers each body's chain of dofs
+/// in it.
+fn fill_mass<S: Scalar>(
+    model: &Model,
+    bodies: &[usize],
+    k: usize,
+    local: impl Fn(&Body) -> &[usize],
+    out: &mut [S],
+    kin: Kinematics<S>,
+) {
     out.fill(S::zero());
     let mut jacobian: [(Vector3<S>, Vector3<S>); 12] = [(Vector3::zeros(), Vector3::zeros()); 12];
-    for &i in &block.bodies {
+    for &i in bodies {
         let body = &model.bodies[i];
         let com = kin.origin[i] + kin.rotation[i] * cast3::<S>(&body.com);
         let inertia = kin.rotation[i] * cast33::<S>(&body.inertia) * kin.rotation[i].transpose();
@@ -871,10 +887,11 @@ fn fill_block_mass<S: Scalar>(
                 .collect();
             &columns
         };
-        for (a, &row) in body.chain_local.iter().enumerate() {
+        let indices = local(body);
+        for (a, &row) in indices.iter().enumerate() {
             let (va, wa) = jac[a];
             let inertia_wa = inertia * wa;
-            for (b, &col) in body.chain_local.iter().enumerate().skip(a) {
+            for (b, &col) in indices.iter().enumerate().skip(a) {
                 let (vb, wb) = jac[b];
                 let entry = mass * va.dot(&vb) + wb.dot(&inertia_wa);
                 out[row * k + col] += entry;
@@ -939,41 +956,20 @@ fn cholesky_solve<S: Scalar>(a: &mut [S], b: &mut [S]) -> bool {
     true
 }
 
-/// Joint-space mass matrix from body Jacobians: `sum m Jv^T Jv + Jw^T I Jw`.
-fn fill_mass_matrix<S: Scalar>(model: &Model, ws: &mut Workspace<S>) {
-    ws.mass.fill(S::zero());
-    for (i, body) in model.bodies.iter().enumerate() {
-        let com = ws.origin[i] + ws.rotation[i] * cast3::<S>(&body.com);
-        let inertia = ws.rotation[i] * cast33::<S>(&body.inertia) * ws.rotation[i].transpose();
-        let mass = S::constant(body.mass);
-        ws.jacobian.clear();
-        for &dof in &body.chain {
-            let s = ws.dof_axis[dof];
-            ws.jacobian.push(if ws.dof_angular[dof] {
-                (s.cross(&(com - ws.dof_center[dof])), s)
-            } else {
-                (s, Vector3::zeros())
-            });
-        }
-        for (a, &row) in body.chain.iter().enumerate() {
-            let (va, wa) = ws.jacobian[a];
-            let inertia_wa = inertia * wa;
-            for (b, &col) in body.chain.iter().enumerate().skip(a) {
-                let (vb, wb) = ws.jacobian[b];
-                let entry = mass * va.dot(&vb) + wb.dot(&inertia_wa);
-                ws.mass[(row, col)] += entry;
-                if b != a {
-                    ws.mass[(col, row)] += entry;
-                }
-            }
-        }
-    }
-}
-
 /// The joint-space mass matrix at state x (positions are read from x).
 pub fn mass_matrix(model: &Model, x: &[f64]) -> DMatrix<f64> {
     let mut ws = model.workspace();
     model.kinematics(x, &mut ws);
-    fill_mass_matrix(model, &mut ws);
-    ws.mass
+    let nv = model.layout.nv;
+    let bodies: Vec<usize> = (0..model.bodies.len()).collect();
+    let mut entries = vec![0.0; nv * nv];
+    let kin = ws_kinematics(
+        &ws.rotation,
+        &ws.origin,
+        &ws.dof_axis,
+        &ws.dof_center,
+        &ws.dof_angular,
+    );
+    fill_mass(model, &bodies, nv, |b| &b.chain, &mut entries, kin);
+    DMatrix::from_row_slice(nv, nv, &entries)
 }

@@ -306,35 +306,79 @@ pub struct SignalInfo {
     pub unit: &'static str,
 }
 
-/// The assembled stage. Immutable: parameter changes build a new model.
+/// The assembled stage. Built once by [`crate::assemble`] and immutable: its
+/// fields are read through methods, and parameter changes build a new model
+/// (so nothing resolved at build time can go stale).
 #[derive(Debug, Clone)]
 pub struct Model {
-    /// Robot name.
-    pub name: String,
-    /// Moving bodies, parents before children.
-    pub bodies: Vec<Body>,
-    /// Isolator bushings.
-    pub isolators: Vec<Isolator>,
-    /// LuGre contacts.
-    pub frictions: Vec<FrictionContact>,
-    /// Actuators.
-    pub actuators: Vec<PointAxis>,
-    /// Sensors.
-    pub sensors: Vec<PointAxis>,
-    /// Servo controller.
-    pub controller: Option<Controller>,
-    /// Gravity, world frame, m/s^2.
-    pub gravity: Vector3<f64>,
-    /// State layout.
-    pub layout: StateLayout,
-    /// Output signals, in the order [`Model::outputs`] writes them.
-    pub signals: Vec<SignalInfo>,
+    pub(crate) name: String,
+    pub(crate) bodies: Vec<Body>,
+    pub(crate) isolators: Vec<Isolator>,
+    pub(crate) frictions: Vec<FrictionContact>,
+    pub(crate) actuators: Vec<PointAxis>,
+    pub(crate) sensors: Vec<PointAxis>,
+    pub(crate) controller: Option<Controller>,
+    pub(crate) gravity: Vector3<f64>,
+    pub(crate) layout: StateLayout,
+    pub(crate) signals: Vec<SignalInfo>,
     /// Diagonal blocks of the mass matrix.
     pub(crate) mass_blocks: Vec<MassBlock>,
     /// How the right-hand side is evaluated (chosen once, when built).
     pub(crate) evaluator: crate::evaluator::Evaluator,
     /// The robot file after the scenario's overrides: what the parameter table reads.
     pub(crate) robot: crate::robot::RobotSpec,
+}
+
+impl Model {
+    /// Robot name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Moving bodies, parents before children.
+    pub fn bodies(&self) -> &[Body] {
+        &self.bodies
+    }
+
+    /// Isolator bushings.
+    pub fn isolators(&self) -> &[Isolator] {
+        &self.isolators
+    }
+
+    /// LuGre contacts.
+    pub fn frictions(&self) -> &[FrictionContact] {
+        &self.frictions
+    }
+
+    /// Actuators.
+    pub fn actuators(&self) -> &[PointAxis] {
+        &self.actuators
+    }
+
+    /// Sensors.
+    pub fn sensors(&self) -> &[PointAxis] {
+        &self.sensors
+    }
+
+    /// The servo controller, if any.
+    pub fn controller(&self) -> Option<&Controller> {
+        self.controller.as_ref()
+    }
+
+    /// Gravity, world frame, m/s^2.
+    pub fn gravity(&self) -> &Vector3<f64> {
+        &self.gravity
+    }
+
+    /// State layout.
+    pub fn layout(&self) -> &StateLayout {
+        &self.layout
+    }
+
+    /// Output signals, in the order [`Model::outputs`] writes them.
+    pub fn signals(&self) -> &[SignalInfo] {
+        &self.signals
+    }
 }
 
 impl Model {

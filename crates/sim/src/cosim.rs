@@ -132,7 +132,7 @@ impl Stepper {
             return Err(SimError::StepSizeUnderflow {
                 t: integrator.t,
                 h: 0.0,
-                non_finite: Some(model.layout.names[i].clone()),
+                non_finite: Some(model.layout().names[i].clone()),
             });
         }
         self.checkpoint = integrator.checkpoint();
@@ -187,7 +187,7 @@ mod tests {
         };
         let mut stepper = Stepper::new(0.0, x0, tolerances(1e-9));
         let mut ws = model.workspace();
-        let index = model.layout.index("table_x.q").expect("table state");
+        let index = model.layout().index("table_x.q").expect("table state");
         let mut worst: f64 = 0.0;
         for k in 1..=500 {
             let t = k as f64 * 1e-3;

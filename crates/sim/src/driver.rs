@@ -71,7 +71,7 @@ pub(crate) fn tolerances(
     Tolerances {
         rtol,
         atol: model
-            .layout
+            .layout()
             .nominal
             .iter()
             .map(|s| s * rtol * atol_scale)
@@ -145,7 +145,7 @@ pub(crate) fn step_failure(model: &Model, failure: StepFailure) -> SimError {
         StepFailure::StepSizeUnderflow { t, h, non_finite } => SimError::StepSizeUnderflow {
             t,
             h,
-            non_finite: non_finite.map(|i| model.layout.names[i].clone()),
+            non_finite: non_finite.map(|i| model.layout().names[i].clone()),
         },
     }
 }

@@ -189,7 +189,8 @@ pub(crate) fn check_settings(
     if let Some(i) = x0.iter().position(|v| !v.is_finite()) {
         return Err(SimError::InvalidInitialState(format!(
             "\"{}\" is {}",
-            model.layout.names[i], x0[i]
+            model.layout().names[i],
+            x0[i]
         )));
     }
     let positive = |name: &str, v: f64| {

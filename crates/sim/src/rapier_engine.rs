@@ -123,7 +123,7 @@ impl World {
 
     /// World motion of every model body.
     fn motions(&self, model: &Model, out: &mut [BodyMotion]) {
-        for ((handle, body), motion) in self.handles.iter().zip(&model.bodies).zip(out) {
+        for ((handle, body), motion) in self.handles.iter().zip(model.bodies()).zip(out) {
             let rb = &self.bodies[*handle];
             let position = rb.position();
             let rotation = matrix3(&position.rotation);
@@ -153,7 +153,7 @@ fn rapier_inertia(inertia: &Matrix3<f64>) -> Matrix3<f64> {
 }
 
 fn body_builder(model: &Model, index: usize, motion: &BodyMotion) -> RigidBodyBuilder {
-    let body = &model.bodies[index];
+    let body = &model.bodies()[index];
     let com_offset = motion.rotation * body.com;
     RigidBodyBuilder::dynamic()
         .pose(Pose::from_parts(
@@ -175,7 +175,7 @@ fn body_builder(model: &Model, index: usize, motion: &BodyMotion) -> RigidBodyBu
 
 /// The rapier joint of a model joint (None for floating joints: a free body).
 fn joint_of(model: &Model, index: usize) -> Option<GenericJoint> {
-    let joint = &model.bodies[index].joint;
+    let joint = &model.bodies()[index].joint;
     let (axis, locked) = match joint.motion {
         JointMotion::Prismatic { axis } => (axis, JointAxesMask::LOCKED_PRISMATIC_AXES),
         JointMotion::Revolute { axis } => (axis, JointAxesMask::LOCKED_REVOLUTE_AXES),
@@ -204,13 +204,13 @@ fn stop_colliders(
     for (i, stop) in settings.stops.iter().enumerate() {
         let key = format!("rapier.stop[{i}].joint");
         let index = model
-            .bodies
+            .bodies()
             .iter()
             .position(|b| b.joint.name == stop.joint)
             .ok_or_else(|| {
                 SimError::InvalidSettings(format!("{key}: no joint named \"{}\"", stop.joint))
             })?;
-        let body = &model.bodies[index];
+        let body = &model.bodies()[index];
         let JointMotion::Prismatic { axis } = body.joint.motion else {
             return Err(SimError::InvalidSettings(format!(
                 "{key}: \"{}\" is not a prismatic joint",
@@ -256,7 +256,7 @@ fn add_payload(
     world: &mut World,
 ) -> Result<(), SimError> {
     let link = model
-        .bodies
+        .bodies()
         .iter()
         .position(|b| b.name == payload.link || b.links.contains(&payload.link))
         .ok_or_else(|| {
@@ -338,7 +338,7 @@ fn build_world(
     parameters.contact_softness = SpringCoefficients::new(300.0, 1.0);
     parameters.static_contact_softness = SpringCoefficients::new(300.0, 1.0);
     let mut world = World {
-        gravity: vector(&model.gravity),
+        gravity: vector(model.gravity()),
         parameters,
         pipeline: PhysicsPipeline::new(),
         islands: IslandManager::new(),
@@ -350,23 +350,23 @@ fn build_world(
         multibody_joints: MultibodyJointSet::new(),
         soft_bodies: SoftBodySet::new(),
         ccd: CCDSolver::new(),
-        handles: Vec::with_capacity(model.bodies.len()),
+        handles: Vec::with_capacity(model.bodies().len()),
         joints: Vec::new(),
         payload: None,
     };
     let ground = world.bodies.insert(RigidBodyBuilder::fixed());
     let grounded = grounded_bodies(model);
     for (index, motion) in motions.iter().enumerate() {
-        if model.bodies[index].mass.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        if model.bodies()[index].mass.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             return Err(SimError::InvalidSettings(format!(
                 "body \"{}\" has no mass; rapier needs a positive mass for every body",
-                model.bodies[index].name
+                model.bodies()[index].name
             )));
         }
         let handle = world.bodies.insert(body_builder(model, index, motion));
         world.handles.push(handle);
         if let Some(joint) = joint_of(model, index) {
-            let parent = model.bodies[index]
+            let parent = model.bodies()[index]
                 .parent
                 .map_or(ground, |p| world.handles[p]);
             if grounded[index] {
@@ -376,7 +376,7 @@ fn build_world(
                     .ok_or_else(|| {
                         SimError::InvalidSettings(format!(
                             "joint \"{}\" would close a loop in rapier's multibody",
-                            model.bodies[index].joint.name
+                            model.bodies()[index].joint.name
                         ))
                     })?;
                 world.joints.push((index, joint_handle));
@@ -411,8 +411,8 @@ fn build_world(
 /// ground. Joints below a floating body become impulse joints (a multibody
 /// with a free root would restart that root's motion from rest).
 fn grounded_bodies(model: &Model) -> Vec<bool> {
-    let mut grounded = vec![false; model.bodies.len()];
-    for (index, body) in model.bodies.iter().enumerate() {
+    let mut grounded = vec![false; model.bodies().len()];
+    for (index, body) in model.bodies().iter().enumerate() {
         let free = matches!(body.joint.motion, JointMotion::Floating);
         grounded[index] = !free && body.parent.is_none_or(|p| grounded[p]);
     }
@@ -423,10 +423,10 @@ fn grounded_bodies(model: &Model) -> Vec<bool> {
 /// a multibody places its links from its own coordinates (zero when a joint
 /// is inserted), not from the poses the bodies were built with.
 fn set_joint_coordinates(model: &Model, x0: &[f64], world: &mut World) {
-    let nq = model.layout.nq;
+    let nq = model.layout().nq;
     let mut touched = Vec::new();
     for &(index, handle) in &world.joints {
-        let joint = &model.bodies[index].joint;
+        let joint = &model.bodies()[index].joint;
         let Some((multibody, link_id)) = world.multibody_joints.get_mut(handle) else {
             continue;
         };
@@ -476,7 +476,7 @@ fn bristle_rate_bound(model: &Model, inputs: &Inputs) -> f64 {
         .max(inputs.reference.velocity.abs())
         .max(BRISTLE_SPEED_FLOOR);
     model
-        .frictions
+        .frictions()
         .iter()
         .map(|f| f.lugre.sigma0 * speed / f.lugre.f_c)
         .fold(0.0, f64::max)
@@ -595,13 +595,13 @@ impl Engine for RapierEngine {
         });
         let mut ws = model.workspace();
         let mut x = x0.to_vec();
-        let mut motions = vec![BodyMotion::identity(); model.bodies.len()];
+        let mut motions = vec![BodyMotion::identity(); model.bodies().len()];
         let mut wrenches = vec![
             BodyWrench {
                 force: Vector3::zeros(),
                 moment: Vector3::zeros(),
             };
-            model.bodies.len()
+            model.bodies().len()
         ];
         let mut counts = StepCounts::default();
         for (k, &t_sample) in times.iter().enumerate() {
@@ -641,7 +641,7 @@ impl Engine for RapierEngine {
             if let Some(i) = x.iter().position(|v| !v.is_finite()) {
                 return Err(SimError::NonFinite {
                     t: t_sample,
-                    state: model.layout.names[i].clone(),
+                    state: model.layout().names[i].clone(),
                 });
             }
             trajectory.push(t_sample, &x);

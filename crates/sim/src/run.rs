@@ -61,12 +61,12 @@ pub fn initial_state_with(
             .map_err(|e| scenario.error("start", e.to_string()))?;
     }
     for (name, value) in &scenario.initial {
-        let index = model.layout.index(name).ok_or_else(|| {
+        let index = model.layout().index(name).ok_or_else(|| {
             scenario.error(
                 format!("initial.{name}"),
                 format!(
                     "no state of that name (states: {})",
-                    model.layout.names.join(", ")
+                    model.layout().names.join(", ")
                 ),
             )
         })?;
@@ -89,7 +89,7 @@ fn check_signal_names(model: &Model, scenario: &Scenario) -> Result<(), LoadErro
     if missing.is_empty() {
         return Ok(());
     }
-    let available: Vec<&str> = model.signals.iter().map(|s| s.name.as_str()).collect();
+    let available: Vec<&str> = model.signals().iter().map(|s| s.name.as_str()).collect();
     Err(scenario.error(
         "output.signals",
         format!(

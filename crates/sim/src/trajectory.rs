@@ -88,7 +88,7 @@ impl Trajectory {
     /// Every output signal of the model along the trajectory.
     pub fn signals(&self, model: &Model, excitation: &dyn Excitation) -> SignalTable {
         let mut workspace = model.workspace();
-        let m = model.signals.len();
+        let m = model.signals().len();
         let mut columns = vec![Vec::with_capacity(self.len()); m];
         let mut out = vec![0.0; m];
         for (k, &t) in self.times.iter().enumerate() {
@@ -103,8 +103,8 @@ impl Trajectory {
             }
         }
         let mut table = SignalTable {
-            names: model.signals.iter().map(|s| s.name.clone()).collect(),
-            units: model.signals.iter().map(|s| s.unit.to_string()).collect(),
+            names: model.signals().iter().map(|s| s.name.clone()).collect(),
+            units: model.signals().iter().map(|s| s.unit.to_string()).collect(),
             times: self.times.clone(),
             columns,
         };
