@@ -8,7 +8,8 @@ use fistage_model::{Inputs, Model, Reference, ReferenceSample, Workspace};
 
 use crate::dopri::{Checkpoint, DormandPrince};
 use crate::driver::{ModelSystem, drive, tolerances};
-use crate::engine::{Excitation, SimError};
+use crate::excitation::Excitation;
+use crate::settings::SimError;
 
 /// The inputs over a communication step: the scenario's reference profile plus
 /// the held reference offset, the held servo force and platform velocity.
@@ -143,7 +144,9 @@ impl Stepper {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::{Engine, NativeEngine, ScenarioExcitation, SimSettings};
+    use crate::engine::{Engine, NativeEngine};
+    use crate::excitation::ScenarioExcitation;
+    use crate::settings::SimSettings;
     use fistage_model::load;
     use std::path::Path;
 

@@ -8,8 +8,9 @@
 use fistage_model::{Inputs, Model, Workspace};
 
 use crate::dopri::{DormandPrince, OdeSystem, StepCounts, StepFailure, Tolerances};
-use crate::engine::{Excitation, SimError};
+use crate::excitation::Excitation;
 use crate::rosenbrock::{JacobianSystem, Rosenbrock};
+use crate::settings::SimError;
 
 /// The model as an ODE `x' = f(t, x)` under an excitation.
 pub(crate) struct ModelSystem<'a> {

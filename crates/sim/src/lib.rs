@@ -9,19 +9,22 @@ pub mod cosim;
 pub mod dopri;
 mod driver;
 pub mod engine;
+pub mod excitation;
 pub mod metrics;
 pub mod rapier_engine;
 pub mod rosenbrock;
 pub mod run;
+pub mod select;
+pub mod settings;
 pub mod trajectory;
 
 pub use cosim::{HeldInputs, Stepper, StepperTolerances};
 pub use dopri::{Checkpoint, StepCounts};
-pub use engine::{
-    Engine, Excitation, NativeEngine, RosenbrockEngine, ScenarioExcitation, SimError, SimSettings,
-    engine_by_name, engine_for, engine_of_kind, sample_times,
-};
+pub use engine::{Engine, NativeEngine, RosenbrockEngine};
+pub use excitation::{Excitation, ScenarioExcitation};
 pub use metrics::{SignalSummary, WindowStats, summarize, window_stats};
 pub use rapier_engine::RapierEngine;
 pub use run::{RunError, RunOutput, initial_state, initial_state_with, run_scenario};
+pub use select::{engine_by_name, engine_for, engine_of_kind};
+pub use settings::{SimError, SimSettings, sample_times};
 pub use trajectory::{ExtraSignal, SignalTable, SolverStats, Trajectory};

@@ -24,7 +24,9 @@ use rapier3d_f64::math::{Matrix, Pose, Rotation, Vector};
 use rapier3d_f64::prelude::*;
 
 use crate::dopri::StepCounts;
-use crate::engine::{Engine, Excitation, SimError, SimSettings, sample_times};
+use crate::engine::Engine;
+use crate::excitation::Excitation;
+use crate::settings::{SimError, SimSettings, sample_times};
 use crate::trajectory::{ExtraSignal, SolverStats, Trajectory};
 
 /// Default step as a fraction of the explicit stability limit 2 / |lambda|max.
@@ -559,7 +561,7 @@ impl Engine for RapierEngine {
         settings: &SimSettings,
         progress: &mut dyn FnMut(f64),
     ) -> Result<Trajectory, SimError> {
-        crate::engine::check_settings(model, x0, settings)?;
+        crate::settings::check_settings(model, x0, settings)?;
         let started = Instant::now();
         let (dt, per_sample) = rapier_step(
             model,

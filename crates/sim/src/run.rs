@@ -4,8 +4,10 @@
 use fistage_model::{EngineKind, EquilibriumKind, LoadError, Loaded, Model, Scenario, Start};
 use thiserror::Error;
 
-use crate::engine::{Excitation, ScenarioExcitation, SimError, SimSettings, engine_for};
+use crate::excitation::{Excitation, ScenarioExcitation};
 use crate::metrics::{SignalSummary, summarize};
+use crate::select::engine_for;
+use crate::settings::{SimError, SimSettings};
 use crate::trajectory::{SignalTable, Trajectory};
 
 /// Why a scenario run failed.

@@ -7,7 +7,7 @@ use fistage_model::Model;
 use serde::Serialize;
 
 use crate::dopri::StepCounts;
-use crate::engine::Excitation;
+use crate::excitation::Excitation;
 
 /// What the engine did.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]

@@ -1,0 +1,136 @@
+//! How a run is integrated ([`SimSettings`]), how it can fail
+//! ([`SimError`]), the checks every engine makes before it starts, and the
+//! uniform output grid.
+
+use fistage_model::{Model, Scenario};
+use thiserror::Error;
+
+/// How to integrate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimSettings {
+    /// End time, s (the run starts at 0).
+    pub t_end: f64,
+    /// Output sample interval, s.
+    pub sample_interval: f64,
+    /// Relative tolerance.
+    pub rtol: f64,
+    /// Absolute tolerance of state i is `rtol * atol_scale * nominal_i`.
+    pub atol_scale: f64,
+    /// Largest step, s.
+    pub max_step: Option<f64>,
+    /// Largest number of accepted plus rejected steps.
+    pub max_steps: u64,
+}
+
+impl SimSettings {
+    /// Settings from a scenario file.
+    pub fn from_scenario(scenario: &Scenario) -> Self {
+        Self {
+            t_end: scenario.duration,
+            sample_interval: 1.0 / scenario.sample_rate,
+            rtol: scenario.solver.rtol,
+            atol_scale: scenario.solver.atol_scale,
+            max_step: scenario.solver.max_step,
+            max_steps: scenario.solver.max_steps,
+        }
+    }
+}
+
+/// Why a simulation failed. Each names the simulated time.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum SimError {
+    /// The step size fell below round-off level.
+    #[error("step size underflow at t = {t:.9} s (h = {h:.3e} s){}", cause_text(.non_finite))]
+    StepSizeUnderflow {
+        /// Time reached, s.
+        t: f64,
+        /// Step size, s.
+        h: f64,
+        /// Name of the first state that became non-finite, if that was the cause.
+        non_finite: Option<String>,
+    },
+    /// The step budget ran out.
+    #[error(
+        "gave up at t = {t:.6} s after {steps} steps (raise solver.max_steps or loosen solver.rtol)"
+    )]
+    TooManySteps {
+        /// Time reached, s.
+        t: f64,
+        /// Steps taken.
+        steps: u64,
+    },
+    /// The initial state is not finite or has the wrong length.
+    #[error("invalid initial state: {0}")]
+    InvalidInitialState(String),
+    /// Settings out of range.
+    #[error("invalid settings: {0}")]
+    InvalidSettings(String),
+    /// A fixed-step engine produced a non-finite state.
+    #[error(
+        "state \"{state}\" became non-finite at t = {t:.9} s (the fixed step is too long for this model)"
+    )]
+    NonFinite {
+        /// Time reached, s.
+        t: f64,
+        /// Name of the first non-finite state.
+        state: String,
+    },
+}
+
+fn cause_text(non_finite: &Option<String>) -> String {
+    match non_finite {
+        Some(name) => format!(": state \"{name}\" became non-finite"),
+        None => ": the solution changes faster than the tolerance allows".into(),
+    }
+}
+
+pub(crate) fn check_settings(
+    model: &Model,
+    x0: &[f64],
+    settings: &SimSettings,
+) -> Result<(), SimError> {
+    if x0.len() != model.n_states() {
+        return Err(SimError::InvalidInitialState(format!(
+            "{} entries for {} states",
+            x0.len(),
+            model.n_states()
+        )));
+    }
+    if let Some(i) = x0.iter().position(|v| !v.is_finite()) {
+        return Err(SimError::InvalidInitialState(format!(
+            "\"{}\" is {}",
+            model.layout().names[i],
+            x0[i]
+        )));
+    }
+    let positive = |name: &str, v: f64| {
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err(SimError::InvalidSettings(format!(
+                "{name} must be > 0, got {v}"
+            )))
+        }
+    };
+    positive("t_end", settings.t_end)?;
+    positive("sample_interval", settings.sample_interval)?;
+    positive("rtol", settings.rtol)?;
+    positive("atol_scale", settings.atol_scale)?;
+    if let Some(h) = settings.max_step {
+        positive("max_step", h)?;
+    }
+    Ok(())
+}
+
+/// Sample times k * dt for k = 0..=N with N dt <= t_end (plus t_end itself when
+/// it is not on the grid).
+pub fn sample_times(t_end: f64, dt: f64) -> Vec<f64> {
+    let n = (t_end / dt * (1.0 + 1e-12)).floor() as usize;
+    let mut times: Vec<f64> = (0..=n).map(|k| k as f64 * dt).collect();
+    if let Some(&last) = times.last()
+        && t_end - last > 1e-9 * dt
+    {
+        times.push(t_end);
+    }
+    times
+}
