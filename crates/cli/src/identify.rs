@@ -633,12 +633,12 @@ fn frf_bode(data: &FrfData, fit: &FrfFit) -> (String, Vec<f64>, Vec<BodeSeries>)
     for &(w, index) in &points {
         let model = fit.response(w);
         freq_hz.push(to_hz(w));
-        fit_mag.push(model.abs());
+        fit_mag.push(model.norm());
         fit_phase.push(model.arg().to_degrees());
         match index {
             Some(i) => {
                 let g = data.response[i];
-                data_mag.push(g.abs());
+                data_mag.push(g.norm());
                 data_phase.push((model.arg() + (g / model).arg()).to_degrees());
             }
             None => {

@@ -29,7 +29,7 @@
 use fistage_model::LugreParams;
 use serde::{Deserialize, Serialize};
 
-use crate::complex::Complex;
+use crate::Complex;
 use crate::error::{IdentError, Result};
 use crate::linalg::Mat;
 use crate::lm::levenberg_marquardt;
@@ -97,7 +97,7 @@ impl FrfData {
             response: self
                 .response
                 .iter()
-                .map(|g| Complex::new(g.abs(), 0.0))
+                .map(|g| Complex::new(g.norm(), 0.0))
                 .collect(),
             has_phase: false,
             ..self.clone()
@@ -150,7 +150,7 @@ impl FrfData {
             ));
         }
         let g = self.response[i];
-        if !(g.re.is_finite() && g.im.is_finite()) || g.abs() == 0.0 {
+        if !(g.re.is_finite() && g.im.is_finite()) || g.norm() == 0.0 {
             return Err(cell(
                 &self.response_column,
                 format!(
@@ -322,7 +322,7 @@ impl FrfFit {
             self.damping.value,
             self.mass.value,
         )
-        .recip()
+        .inv()
     }
 
     /// LuGre parameters with sigma0 and, when sigma2 was given, sigma1 replaced.
@@ -410,7 +410,7 @@ pub fn fit_frf(data: &FrfData, options: &FrfOptions) -> Result<FrfFit> {
 /// noise far from it). Data whose phase leads on balance were exported with
 /// the opposite sign convention.
 fn check_phase_convention(data: &FrfData) -> Result<()> {
-    let balance: f64 = data.response.iter().map(|g| g.im / g.abs()).sum();
+    let balance: f64 = data.response.iter().map(|g| g.im / g.norm()).sum();
     if balance > 0.0 {
         let leading = data.response.iter().filter(|g| g.im > 0.0).count();
         return Err(IdentError::InsufficientData {
@@ -542,16 +542,16 @@ impl Problem<'_> {
                 }
             })
         };
-        let magnitudes: Vec<f64> = self.response.iter().map(|g| g.abs()).collect();
+        let magnitudes: Vec<f64> = self.response.iter().map(|g| g.norm()).collect();
         let low = index_of(|a, b| a < b, self.omega);
         let high = index_of(|a, b| a > b, self.omega);
         let peak = index_of(|a, b| a > b, &magnitudes);
-        let sigma0 = 1.0 / self.response[low].abs();
+        let sigma0 = 1.0 / self.response[low].norm();
         let w_high = self.omega[high];
         let mass = self
             .known_mass
-            .unwrap_or_else(|| 1.0 / (self.response[high].abs() * w_high * w_high));
-        let damping = 1.0 / (self.response[peak].abs() * self.omega[peak]);
+            .unwrap_or_else(|| 1.0 / (self.response[high].norm() * w_high * w_high));
+        let damping = 1.0 / (self.response[peak].norm() * self.omega[peak]);
         [sigma0, damping, mass]
     }
 
@@ -573,7 +573,7 @@ impl Problem<'_> {
         r.clear();
         for (&w, &g) in self.omega.iter().zip(self.response) {
             let p = g * model_denominator(w, sigma0, damping, mass);
-            r.push(weights[0] * p.abs().ln());
+            r.push(weights[0] * p.norm().ln());
             if self.use_phase {
                 r.push(weights[1] * p.arg());
             }
@@ -672,16 +672,16 @@ impl Problem<'_> {
         for (&w, &g) in self.omega.iter().zip(self.response) {
             let d = model_denominator(w, sigma0, damping, mass);
             let p = g * d;
-            mag_db.push(db_per_neper * p.abs().ln());
+            mag_db.push(db_per_neper * p.norm().ln());
             phase_deg.push(p.arg().to_degrees());
-            relative.push((p - Complex::new(1.0, 0.0)).abs());
+            relative.push((p - Complex::new(1.0, 0.0)).norm());
         }
         let rms = |x: &[f64]| (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt();
         let max_abs = |x: &[f64]| x.iter().map(|v| v.abs()).fold(0.0, f64::max);
         let measured_db: Vec<f64> = self
             .response
             .iter()
-            .map(|g| db_per_neper * g.abs().ln())
+            .map(|g| db_per_neper * g.norm().ln())
             .collect();
         let mean_db = measured_db.iter().sum::<f64>() / measured_db.len() as f64;
         let sst: f64 = measured_db.iter().map(|v| (v - mean_db).powi(2)).sum();

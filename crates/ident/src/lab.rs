@@ -66,7 +66,7 @@ use fistage_model::{
 };
 use fistage_sim::{Engine, Excitation, NativeEngine, SimSettings, Trajectory};
 
-use crate::complex::Complex;
+use crate::Complex;
 use crate::error::{IdentError, Result};
 use crate::frf::FrfData;
 use crate::stribeck::StribeckData;
@@ -713,7 +713,7 @@ impl FrfLab {
             let mut sum = Complex::new(0.0, 0.0);
             for (k, value) in values.iter().enumerate() {
                 let phase = -2.0 * PI * (k % per_period) as f64 / per_period as f64;
-                sum = sum + Complex::from_polar(*value, phase);
+                sum += Complex::from_polar(*value, phase);
             }
             sum.scale(2.0 / n as f64)
         };

@@ -25,7 +25,6 @@
 
 #![warn(missing_docs)]
 
-mod complex;
 pub mod csv_input;
 mod error;
 mod exact;
@@ -40,12 +39,13 @@ pub mod synth;
 pub mod uncertainty;
 pub mod units;
 
-pub use complex::Complex;
 pub use csv_input::{
     UnitOverrides, parse_frf_csv, parse_stribeck_csv, read_frf_csv, read_stribeck_csv,
 };
 pub use error::{IdentError, Result};
 pub use frf::{FrfData, FrfFit, FrfOptions, FrfStart, MassOption, Sigma2Input, fit_frf};
+/// A complex number `re + j im` (frequency responses).
+pub use num_complex::Complex64 as Complex;
 pub use report::{FrfReport, StribeckReport, frf_override, stribeck_override};
 pub use stribeck::{
     AsymmetricFit, AsymmetryTest, Loss, StribeckData, StribeckFit, StribeckOptions, fit_stribeck,

@@ -238,7 +238,7 @@ fn frf_bias_is_proportional_to_the_amplitude() {
         tight.measure(&stage).unwrap(),
     );
     for (x, y) in a.runs.iter().zip(&b.runs) {
-        let change = (x.exact_response - y.exact_response).abs() / y.exact_response.abs();
+        let change = (x.exact_response - y.exact_response).norm() / y.exact_response.norm();
         assert!(change < 1e-5, "{} Hz: {change}", x.frequency_hz);
     }
 }
