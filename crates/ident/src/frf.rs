@@ -27,11 +27,12 @@
 //! candidate with the smallest final error wins.
 
 use fistage_model::LugreParams;
+use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
 use crate::Complex;
 use crate::error::{IdentError, Result};
-use crate::linalg::Mat;
+use crate::linalg::row_major;
 use crate::lm::levenberg_marquardt;
 use crate::qp::{RegressionLoss, regression};
 use crate::stribeck::line_span;
@@ -482,15 +483,15 @@ impl Problem<'_> {
     fn complex_linear_estimate(&self) -> std::result::Result<[f64; 3], String> {
         let n = self.omega.len();
         let cols = self.n_params();
-        let mut a = Mat::zeros(2 * n, cols);
+        let mut a = DMatrix::zeros(2 * n, cols);
         let mut y = vec![0.0; 2 * n];
         for (k, (&w, &g)) in self.omega.iter().zip(self.response).enumerate() {
             // G (sigma0 + j w c - M w^2) = 1, split into real and imaginary rows.
             let (re, im) = (2 * k, 2 * k + 1);
-            a.set(re, 0, g.re);
-            a.set(re, 1, -g.im * w);
-            a.set(im, 0, g.im);
-            a.set(im, 1, g.re * w);
+            a[(re, 0)] = g.re;
+            a[(re, 1)] = -g.im * w;
+            a[(im, 0)] = g.im;
+            a[(im, 1)] = g.re * w;
             y[re] = 1.0;
             match self.known_mass {
                 Some(m) => {
@@ -498,8 +499,8 @@ impl Problem<'_> {
                     y[im] += g.im * m * w * w;
                 }
                 None => {
-                    a.set(re, 2, -g.re * w * w);
-                    a.set(im, 2, -g.im * w * w);
+                    a[(re, 2)] = -g.re * w * w;
+                    a[(im, 2)] = -g.im * w * w;
                 }
             }
         }
@@ -511,15 +512,15 @@ impl Problem<'_> {
         // (alpha + beta w^2 + gamma w^4) |G|^2 = 1 with alpha = sigma0^2,
         // beta = c^2 - 2 sigma0 M, gamma = M^2.
         let cols = self.n_params();
-        let mut a = Mat::zeros(self.omega.len(), cols);
+        let mut a = DMatrix::zeros(self.omega.len(), cols);
         let mut y = vec![1.0; self.omega.len()];
         for (k, (&w, &g)) in self.omega.iter().zip(self.response).enumerate() {
             let g2 = g.norm_sqr();
-            a.set(k, 0, g2);
-            a.set(k, 1, g2 * w * w);
+            a[(k, 0)] = g2;
+            a[(k, 1)] = g2 * w * w;
             match self.known_mass {
                 Some(m) => y[k] -= m * m * w.powi(4) * g2,
-                None => a.set(k, 2, g2 * w.powi(4)),
+                None => a[(k, 2)] = g2 * w.powi(4),
             }
         }
         let nonnegative = [true, false, true];
@@ -580,7 +581,7 @@ impl Problem<'_> {
         }
     }
 
-    fn jacobian(&self, q: &[f64], weights: [f64; 2], j: &mut Mat) {
+    fn jacobian(&self, q: &[f64], weights: [f64; 2], j: &mut DMatrix<f64>) {
         let [sigma0, damping, mass] = self.natural(q);
         let rows_per_point = if self.use_phase { 2 } else { 1 };
         for (k, &w) in self.omega.iter().enumerate() {
@@ -592,9 +593,9 @@ impl Problem<'_> {
             ];
             for (col, dd) in partials.iter().take(self.n_params()).enumerate() {
                 let ratio = *dd / d;
-                j.set(rows_per_point * k, col, weights[0] * ratio.re);
+                j[(rows_per_point * k, col)] = weights[0] * ratio.re;
                 if self.use_phase {
-                    j.set(rows_per_point * k + 1, col, weights[1] * ratio.im);
+                    j[(rows_per_point * k + 1, col)] = weights[1] * ratio.im;
                 }
             }
         }
@@ -628,16 +629,14 @@ impl Problem<'_> {
         let natural = self.natural(q);
         let mut r = Vec::new();
         self.residuals(q, weights, &mut r);
-        let mut j = Mat::zeros(r.len(), p);
+        let mut j = DMatrix::zeros(r.len(), p);
         self.jacobian(q, weights, &mut j);
         // From d/d(ln x) to d/dx.
-        for row in 0..j.rows {
-            for (col, value) in natural.iter().enumerate().take(p) {
-                j.set(row, col, j.get(row, col) / value);
-            }
+        for (mut col, value) in j.column_iter_mut().zip(&natural) {
+            col /= *value;
         }
         let covariance = least_squares_covariance(&j, &r);
-        let errors = standard_errors(p, covariance.as_deref());
+        let errors = standard_errors(p, covariance.as_ref());
         let dof = r.len() - p;
         let t = t95(dof as f64);
         let sigma0 = Estimate::new(natural[0], errors[0], t, 0.0);
@@ -655,7 +654,7 @@ impl Problem<'_> {
             mass_fitted: self.known_mass.is_none(),
             sigma1,
             sigma2: sigma2_estimate,
-            covariance,
+            covariance: covariance.as_ref().map(row_major),
             used_phase: self.use_phase,
             residuals: self.residual_stats(data, q, dof),
             weights,

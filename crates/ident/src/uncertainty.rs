@@ -13,7 +13,9 @@
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ChiSquared, Continuous, ContinuousCDF, FisherSnedecor, StudentsT};
 
-use crate::linalg::{Mat, least_squares};
+use nalgebra::DMatrix;
+
+use crate::linalg::inverse_normal;
 
 /// A fitted parameter with its standard error and 95% confidence interval, SI units.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -127,19 +129,25 @@ pub fn mad_scale(residuals: &[f64]) -> f64 {
 }
 
 /// Covariance `s^2 (J^T J)^-1` of a least-squares fit; `None` if J is singular.
-pub(crate) fn least_squares_covariance(jacobian: &Mat, residuals: &[f64]) -> Option<Vec<f64>> {
+pub(crate) fn least_squares_covariance(
+    jacobian: &DMatrix<f64>,
+    residuals: &[f64],
+) -> Option<DMatrix<f64>> {
     let dof = jacobian
-        .rows
-        .checked_sub(jacobian.cols)
+        .nrows()
+        .checked_sub(jacobian.ncols())
         .filter(|&d| d > 0)?;
     let s2 = residuals.iter().map(|r| r * r).sum::<f64>() / dof as f64;
-    let inverse = least_squares(jacobian, &vec![0.0; jacobian.rows])?.inverse_normal;
-    Some(inverse.iter().map(|v| v * s2).collect())
+    Some(inverse_normal(jacobian)? * s2)
 }
 
 /// Huber's covariance of an M-estimate with Huber score at threshold `delta`.
-pub(crate) fn huber_covariance(jacobian: &Mat, residuals: &[f64], delta: f64) -> Option<Vec<f64>> {
-    let (n, p) = (jacobian.rows, jacobian.cols);
+pub(crate) fn huber_covariance(
+    jacobian: &DMatrix<f64>,
+    residuals: &[f64],
+    delta: f64,
+) -> Option<DMatrix<f64>> {
+    let (n, p) = jacobian.shape();
     let dof = n.checked_sub(p).filter(|&d| d > 0)?;
     let psi2: f64 = residuals
         .iter()
@@ -152,16 +160,15 @@ pub(crate) fn huber_covariance(jacobian: &Mat, residuals: &[f64], delta: f64) ->
     }
     let k = 1.0 + (p as f64 / n as f64) * (1.0 - m) / m;
     let factor = k * k * (psi2 / dof as f64) / (m * m);
-    let inverse = least_squares(jacobian, &vec![0.0; n])?.inverse_normal;
-    Some(inverse.iter().map(|v| v * factor).collect())
+    Some(inverse_normal(jacobian)? * factor)
 }
 
 /// Standard errors from a covariance matrix (`None` for a non-positive variance).
-pub(crate) fn standard_errors(p: usize, covariance: Option<&[f64]>) -> Vec<Option<f64>> {
+pub(crate) fn standard_errors(p: usize, covariance: Option<&DMatrix<f64>>) -> Vec<Option<f64>> {
     (0..p)
         .map(|i| {
             covariance
-                .map(|c| c[i * p + i])
+                .map(|c| c[(i, i)])
                 .filter(|v| *v >= 0.0 && v.is_finite())
                 .map(f64::sqrt)
         })
