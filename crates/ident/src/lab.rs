@@ -64,7 +64,9 @@ use std::path::Path;
 use fistage_model::{
     ControllerSettings, Inputs, LugreParams, Model, ReferenceSample, RobotSpec, Scenario, assemble,
 };
-use fistage_sim::{Engine, Excitation, NativeEngine, SimSettings, Trajectory};
+use fistage_sim::{
+    Engine, Excitation, NativeEngine, SignalTable, SimError, SimSettings, Trajectory,
+};
 
 use crate::Complex;
 use crate::error::{IdentError, Result};
@@ -180,13 +182,20 @@ impl LabStage {
         Ok(model)
     }
 
-    fn signal(&self, model: &Model, name: &str) -> Result<usize> {
-        model
-            .signal_index(name)
-            .ok_or_else(|| IdentError::Simulation {
-                file: self.source.clone(),
-                message: format!("the model has no signal '{name}'"),
-            })
+    /// Indices of the actuator force and the sensor position among the model's signals.
+    fn force_and_position(&self, model: &Model) -> Result<[usize; 2]> {
+        let signal = |name: String| {
+            model
+                .signal_index(&name)
+                .ok_or_else(|| IdentError::Simulation {
+                    file: self.source.clone(),
+                    message: format!("the model has no signal '{name}'"),
+                })
+        };
+        Ok([
+            signal(format!("{}.force", self.actuator))?,
+            signal(format!("{}.position", self.sensor))?,
+        ])
     }
 
     fn simulation_error(&self, what: &str, error: impl std::fmt::Display) -> IdentError {
@@ -220,7 +229,7 @@ fn simulate(
     t_end: f64,
     dt: f64,
     tolerance: Tolerance,
-) -> std::result::Result<Trajectory, fistage_sim::SimError> {
+) -> std::result::Result<Trajectory, SimError> {
     let settings = SimSettings {
         t_end,
         sample_interval: dt,
@@ -230,6 +239,30 @@ fn simulate(
         max_steps: 200_000_000,
     };
     NativeEngine.simulate(model, x0, excitation, &settings, &mut |_| {})
+}
+
+/// One run of a test: `start` drives the model from rest over `settle` (only
+/// the end state is kept), then `measuring`, the same excitation with its clock
+/// continued, over `window` sampled every `dt`. Returns the signals of the
+/// window and the integration steps of the whole run.
+fn settle_and_measure(
+    model: &Model,
+    [start, measuring]: [&dyn Excitation; 2],
+    [settle, window, dt]: [f64; 3],
+    tolerance: Tolerance,
+) -> std::result::Result<(SignalTable, u64), SimError> {
+    let x0 = model.zero_state();
+    let settled = simulate(model, &x0, start, settle, settle, tolerance)?;
+    let measured = simulate(
+        model,
+        settled.last_state(),
+        measuring,
+        window,
+        dt,
+        tolerance,
+    )?;
+    let steps = settled.stats.counts.steps + measured.stats.counts.steps;
+    Ok((measured.signals(model, measuring), steps))
 }
 
 /// Integration tolerances of the simulated runs.
@@ -293,6 +326,18 @@ fn quantise(x: f64, resolution: f64) -> f64 {
 fn run_seed(seed: u64, i: usize) -> u64 {
     seed.wrapping_mul(0x9e37_79b9_7f4a_7c15)
         .wrapping_add(i as u64 + 1)
+}
+
+/// Runs `run(i, seed of run i)` for `i in 0..n` on the available cores; the
+/// results in order, or the first error.
+fn runs<T: Send>(
+    n: usize,
+    seed: u64,
+    run: impl Fn(usize, u64) -> Result<T> + Sync,
+) -> Result<Vec<T>> {
+    parallel(n, |i| run(i, run_seed(seed, i)))
+        .into_iter()
+        .collect()
 }
 
 /// The servo reference of a constant-velocity run: from rest at 0, constant
@@ -441,20 +486,12 @@ impl StribeckLab {
             k_i: 0.0,
         };
         let model = stage.model(Some(servo))?;
-        let force = stage.signal(&model, &format!("{}.force", stage.actuator))?;
-        let position = stage.signal(&model, &format!("{}.position", stage.sensor))?;
+        let signals = stage.force_and_position(&model)?;
         let mut velocities: Vec<f64> = self.speeds.iter().rev().map(|s| -s).collect();
         velocities.extend(self.speeds.iter().copied());
-        let runs = parallel(velocities.len(), |i| {
-            self.run(
-                stage,
-                &model,
-                velocities[i],
-                [force, position],
-                run_seed(self.seed, i),
-            )
-        });
-        let runs: Vec<StribeckRun> = runs.into_iter().collect::<Result<_>>()?;
+        let runs = runs(velocities.len(), self.seed, |i, seed| {
+            self.run(stage, &model, velocities[i], signals, seed)
+        })?;
         if let Some(run) = runs.iter().find(|r| {
             !(r.drift.abs() <= self.steady_tolerance && r.ripple <= self.steady_tolerance)
         }) {
@@ -489,30 +526,19 @@ impl StribeckLab {
         let speed = velocity.abs();
         let settle = self.accel_time + self.servo_settle.max(self.settle_travel / speed);
         let window = self.window_time.max(self.window_travel / speed);
-        let failed = |e| stage.simulation_error(&format!("f_ss run at {velocity} m/s"), e);
         let ramp = Ramp {
             velocity,
             accel_time: self.accel_time,
             offset: 0.0,
         };
-        let x0 = model.zero_state();
-        let settled =
-            simulate(model, &x0, &ramp, settle, settle, self.tolerance).map_err(failed)?;
         let measuring = Ramp {
             offset: settle,
             ..ramp
         };
-        let dt = 1.0 / self.sample_rate;
-        let trajectory = simulate(
-            model,
-            settled.last_state(),
-            &measuring,
-            window,
-            dt,
-            self.tolerance,
-        )
-        .map_err(failed)?;
-        let signals = trajectory.signals(model, &measuring);
+        let times = [settle, window, 1.0 / self.sample_rate];
+        let (signals, steps) =
+            settle_and_measure(model, [&ramp, &measuring], times, self.tolerance)
+                .map_err(|e| stage.simulation_error(&format!("f_ss run at {velocity} m/s"), e))?;
         let f = &signals.columns[force];
         let x = &signals.columns[position];
         let t = &signals.times;
@@ -540,7 +566,7 @@ impl StribeckLab {
             ripple,
             settle_time: settle,
             window,
-            steps: settled.stats.counts.steps + trajectory.stats.counts.steps,
+            steps,
         })
     }
 }
@@ -644,18 +670,10 @@ impl FrfLab {
     /// Runs the test: one stepped-sine run per frequency.
     pub fn measure(&self, stage: &LabStage) -> Result<FrfMeasurement> {
         let model = stage.model(None)?;
-        let force = stage.signal(&model, &format!("{}.force", stage.actuator))?;
-        let position = stage.signal(&model, &format!("{}.position", stage.sensor))?;
-        let runs = parallel(self.frequencies_hz.len(), |i| {
-            self.run(
-                stage,
-                &model,
-                self.frequencies_hz[i],
-                [force, position],
-                run_seed(self.seed, i),
-            )
-        });
-        let runs: Vec<FrfRun> = runs.into_iter().collect::<Result<_>>()?;
+        let signals = stage.force_and_position(&model)?;
+        let runs = runs(self.frequencies_hz.len(), self.seed, |i, seed| {
+            self.run(stage, &model, self.frequencies_hz[i], signals, seed)
+        })?;
         let data = FrfData::new_complex(
             format!("{} (simulated FRF test)", stage.source),
             runs.iter().map(|r| 2.0 * PI * r.frequency_hz).collect(),
@@ -677,31 +695,21 @@ impl FrfLab {
         let settle = whole(self.settle_time, self.settle_periods) as f64 * period;
         let periods = whole(self.measure_time, self.measure_periods);
         let per_period = self.samples_per_period.max(4);
-        let failed = |e| stage.simulation_error(&format!("FRF run at {frequency_hz} Hz"), e);
         let drive = SineForce {
             amplitude: self.force_amplitude,
             omega: 2.0 * PI * frequency_hz,
             offset: 0.0,
         };
-        let x0 = model.zero_state();
-        let settled =
-            simulate(model, &x0, &drive, settle, settle, self.tolerance).map_err(failed)?;
         let measuring = SineForce {
             offset: settle,
             ..drive
         };
         let n = periods * per_period;
         let dt = period / per_period as f64;
-        let trajectory = simulate(
-            model,
-            settled.last_state(),
-            &measuring,
-            n as f64 * dt,
-            dt,
-            self.tolerance,
-        )
-        .map_err(failed)?;
-        let signals = trajectory.signals(model, &measuring);
+        let times = [settle, n as f64 * dt, dt];
+        let (signals, steps) =
+            settle_and_measure(model, [&drive, &measuring], times, self.tolerance)
+                .map_err(|e| stage.simulation_error(&format!("FRF run at {frequency_hz} Hz"), e))?;
         let mut rng = Rng::new(seed);
         let x: Vec<f64> = signals.columns[position][..n]
             .iter()
@@ -725,7 +733,7 @@ impl FrfLab {
             peak_bristle: peak_ratio(&signals.columns, stage, model, n),
             settle_time: settle,
             periods,
-            steps: settled.stats.counts.steps + trajectory.stats.counts.steps,
+            steps,
         })
     }
 }
