@@ -18,7 +18,7 @@
 //! succeeds.
 //!
 //! The `simulate-*` commands make such data files from fistage's own simulation
-//! of a stage (see `fistage_ident::lab`): f_ss(v) from constant-velocity servo
+//! of a stage (see `fistage_analysis::lab`): f_ss(v) from constant-velocity servo
 //! runs, the FRF from a stepped sine on the open-loop stage, with the sensor
 //! errors of a lab unless `--exact`; they print the stage's true parameters.
 
@@ -26,7 +26,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand, ValueEnum};
-use fistage_ident::lab::{FrfLab, LabStage, StribeckLab, log_spaced};
+use fistage_analysis::lab::{FrfLab, LabStage, StribeckLab, log_spaced};
 use fistage_ident::report::{
     DEFAULT_ELEMENT, frf_curve_csv, frf_data_vs_fit_csv, stribeck_curve_csv,
     stribeck_data_vs_fit_csv,

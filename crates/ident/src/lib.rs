@@ -9,8 +9,6 @@
 //! * [`frf`] fits sigma0, sigma1 + sigma2 (and the mass) to the pre-motion FRF;
 //! * [`uncertainty`] gives 95% intervals and residual statistics;
 //! * [`synth`] makes seeded synthetic data from known parameters;
-//! * [`lab`] measures f_ss(v) and the FRF on the simulated stage (fistage's own
-//!   engine), as a lab would, sensor errors included;
 //! * [`report`] turns fits into JSON, a table and a scenario override.
 //!
 //! ```
@@ -29,7 +27,6 @@ pub mod csv_input;
 mod error;
 mod exact;
 pub mod frf;
-pub mod lab;
 mod linalg;
 mod lm;
 mod qp;

@@ -2,7 +2,7 @@
 //! 1-DOF stage of the paper, `robots/stage_1dof_rigid.urdf`, Table 1), the way
 //! the paper's appendix measured the real one: f_ss(v) from the servo force of
 //! constant-velocity runs, the pre-motion FRF from a stepped sine on the
-//! open-loop stage. See [`fistage_ident::lab`].
+//! open-loop stage. See [`fistage_analysis::lab`].
 //!
 //! What remains between the identified and the true parameters, and why:
 //!
@@ -27,7 +27,7 @@
 
 use std::path::{Path, PathBuf};
 
-use fistage_ident::lab::{FrfLab, LabStage, StribeckLab, Tolerance};
+use fistage_analysis::lab::{FrfLab, LabStage, StribeckLab, Tolerance};
 use fistage_ident::{
     Estimate, FrfOptions, IdentError, Sigma2Input, StribeckOptions, fit_frf, fit_stribeck,
 };

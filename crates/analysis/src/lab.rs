@@ -68,11 +68,8 @@ use fistage_sim::{
     Engine, Excitation, NativeEngine, SignalTable, SimError, SimSettings, Trajectory,
 };
 
-use crate::Complex;
-use crate::error::{IdentError, Result};
-use crate::frf::FrfData;
-use crate::stribeck::StribeckData;
-use crate::synth::Rng;
+use fistage_ident::synth::Rng;
+use fistage_ident::{Complex, FrfData, IdentError, Result, StribeckData};
 
 /// A stage to measure: a robot file (or a scenario file, for its robot and
 /// overrides) with one friction contact, an actuator and a sensor.
