@@ -70,6 +70,7 @@ use fistage_sim::{
 
 use fistage_ident::synth::Rng;
 use fistage_ident::{Complex, FrfData, IdentError, Result, StribeckData};
+use rayon::prelude::*;
 
 /// A stage to measure: a robot file (or a scenario file, for its robot and
 /// overrides) with one friction contact, an actuator and a sensor.
@@ -101,8 +102,10 @@ impl LabStage {
                 .file_name()
                 .map(|n| n.to_string_lossy().into_owned())
                 .unwrap_or_default();
-            let text = format!("robot = {}\nduration = 1.0\n", toml_string(&name));
-            Scenario::from_str(&text, path)?
+            let mut text = toml::Table::new();
+            text.insert("robot".into(), name.into());
+            text.insert("duration".into(), 1.0.into());
+            Scenario::from_str(&text.to_string(), path)?
         };
         let robot = RobotSpec::from_file(&scenario.robot)?;
         let source = path.display().to_string();
@@ -203,21 +206,6 @@ impl LabStage {
     }
 }
 
-/// A TOML basic string.
-fn toml_string(text: &str) -> String {
-    let mut out = String::from("\"");
-    for ch in text.chars() {
-        match ch {
-            '"' => out.push_str("\\\""),
-            '\\' => out.push_str("\\\\"),
-            c if c.is_control() => out.push_str(&format!("\\u{:04X}", c as u32)),
-            c => out.push(c),
-        }
-    }
-    out.push('"');
-    out
-}
-
 /// Integrates `model` from `x0` over `[0, t_end]`, sampled every `dt`.
 fn simulate(
     model: &Model,
@@ -272,36 +260,6 @@ pub struct Tolerance {
     pub atol_scale: f64,
 }
 
-/// Runs `job(i)` for `i in 0..n` on the available cores, results in order.
-fn parallel<T: Send>(n: usize, job: impl Fn(usize) -> T + Sync) -> Vec<T> {
-    let workers = std::thread::available_parallelism()
-        .map_or(1, |c| c.get())
-        .min(n.max(1));
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let mut results: Vec<(usize, T)> = std::thread::scope(|scope| {
-        let handles: Vec<_> = (0..workers)
-            .map(|_| {
-                scope.spawn(|| {
-                    let mut done = Vec::new();
-                    loop {
-                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                        if i >= n {
-                            break done;
-                        }
-                        done.push((i, job(i)));
-                    }
-                })
-            })
-            .collect();
-        handles
-            .into_iter()
-            .flat_map(|h| h.join().expect("a lab run panicked"))
-            .collect()
-    });
-    results.sort_by_key(|(i, _)| *i);
-    results.into_iter().map(|(_, r)| r).collect()
-}
-
 /// `n` values from `lo` to `hi`, equally spaced on a logarithmic scale (at least 2).
 pub fn log_spaced(lo: f64, hi: f64, n: usize) -> Vec<f64> {
     let n = n.max(2);
@@ -325,16 +283,19 @@ fn run_seed(seed: u64, i: usize) -> u64 {
         .wrapping_add(i as u64 + 1)
 }
 
-/// Runs `run(i, seed of run i)` for `i in 0..n` on the available cores; the
-/// results in order, or the first error.
+/// Runs `run(i, seed of run i)` for `i in 0..n` on rayon's threads; the
+/// results in order, or the first error in that order (every run finishes,
+/// so which error is reported does not depend on the scheduling).
 fn runs<T: Send>(
     n: usize,
     seed: u64,
     run: impl Fn(usize, u64) -> Result<T> + Sync,
 ) -> Result<Vec<T>> {
-    parallel(n, |i| run(i, run_seed(seed, i)))
-        .into_iter()
-        .collect()
+    let results: Vec<Result<T>> = (0..n)
+        .into_par_iter()
+        .map(|i| run(i, run_seed(seed, i)))
+        .collect();
+    results.into_iter().collect()
 }
 
 /// The servo reference of a constant-velocity run: from rest at 0, constant
