@@ -18,7 +18,7 @@
 //! succeeds.
 //!
 //! The `simulate-*` commands make such data files from fistage's own simulation
-//! of a stage (see `fistage_ident::lab`): f_ss(v) from constant-velocity servo
+//! of a stage (see `fistage_analysis::lab`): f_ss(v) from constant-velocity servo
 //! runs, the FRF from a stepped sine on the open-loop stage, with the sensor
 //! errors of a lab unless `--exact`; they print the stage's true parameters.
 
@@ -26,7 +26,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand, ValueEnum};
-use fistage_ident::lab::{FrfLab, LabStage, StribeckLab, log_spaced};
+use fistage_analysis::lab::{FrfLab, LabStage, StribeckLab, log_spaced};
 use fistage_ident::report::{
     DEFAULT_ELEMENT, frf_curve_csv, frf_data_vs_fit_csv, stribeck_curve_csv,
     stribeck_data_vs_fit_csv,
@@ -633,12 +633,12 @@ fn frf_bode(data: &FrfData, fit: &FrfFit) -> (String, Vec<f64>, Vec<BodeSeries>)
     for &(w, index) in &points {
         let model = fit.response(w);
         freq_hz.push(to_hz(w));
-        fit_mag.push(model.abs());
+        fit_mag.push(model.norm());
         fit_phase.push(model.arg().to_degrees());
         match index {
             Some(i) => {
                 let g = data.response[i];
-                data_mag.push(g.abs());
+                data_mag.push(g.norm());
                 data_phase.push((model.arg() + (g / model).arg()).to_degrees());
             }
             None => {

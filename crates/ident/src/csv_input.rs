@@ -18,7 +18,7 @@
 
 use std::path::Path;
 
-use crate::complex::Complex;
+use crate::Complex;
 use crate::error::{IdentError, Result};
 use crate::frf::FrfData;
 use crate::stribeck::StribeckData;

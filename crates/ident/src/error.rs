@@ -84,10 +84,11 @@ pub enum IdentError {
     /// An option given to a fit is out of range.
     #[error("invalid option: {0}")]
     InvalidOption(String),
-    /// The stage to simulate could not be loaded (robot or scenario file).
+    /// The stage to simulate could not be loaded (robot or scenario file; the
+    /// simulated lab of `fistage_analysis::lab`).
     #[error(transparent)]
     Load(#[from] fistage_model::LoadError),
-    /// A simulated measurement could not be made.
+    /// A simulated measurement (`fistage_analysis::lab`) could not be made.
     #[error("{file}: {message}")]
     Simulation {
         /// The robot or scenario file of the stage.

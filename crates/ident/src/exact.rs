@@ -38,7 +38,9 @@
 //! the caller then solves the program with the interior-point solver. A
 //! certified answer is the global optimum of the same program, to rounding.
 
-use crate::linalg::Mat;
+use nalgebra::DMatrix;
+
+use crate::linalg::{column, least_squares};
 
 /// Largest number of columns handled (the faces grow as `2^k`).
 const MAX_COLUMNS: usize = 8;
@@ -51,8 +53,8 @@ const PIVOTS_PER_COLUMN: usize = 40;
 
 /// The Huber regression `min sum huber(a_i x - y_i, delta)` with `x_j >= 0`
 /// where `bounded[j]`; `None` if the optimum could not be certified.
-pub(crate) fn huber(a: &Mat, y: &[f64], bounded: &[bool], delta: f64) -> Option<Vec<f64>> {
-    let p = a.cols;
+pub(crate) fn huber(a: &DMatrix<f64>, y: &[f64], bounded: &[bool], delta: f64) -> Option<Vec<f64>> {
+    let p = a.ncols();
     if p == 0 || p > MAX_COLUMNS || !(delta > 0.0 && delta.is_finite()) {
         return None;
     }
@@ -84,9 +86,9 @@ pub(crate) fn huber(a: &Mat, y: &[f64], bounded: &[bool], delta: f64) -> Option<
         }
         let r = residuals(a, y, &x);
         let psi: Vec<f64> = r.iter().map(|v| v.clamp(-delta, delta)).collect();
-        let g = a.tr_mul_vec(&psi);
+        let g = a.tr_mul(&column(&psi));
         let certified = (0..p).filter(|&j| held(j)).all(|j| {
-            let scale: f64 = (0..a.rows).map(|i| a.get(i, j).abs()).sum::<f64>() * delta;
+            let scale: f64 = a.column(j).iter().map(|v| v.abs()).sum::<f64>() * delta;
             g[j] >= -1e-10 * scale
         });
         if certified {
@@ -97,8 +99,8 @@ pub(crate) fn huber(a: &Mat, y: &[f64], bounded: &[bool], delta: f64) -> Option<
 }
 
 /// `A x - y`.
-fn residuals(a: &Mat, y: &[f64], x: &[f64]) -> Vec<f64> {
-    a.mul_vec(x).iter().zip(y).map(|(f, y)| f - y).collect()
+fn residuals(a: &DMatrix<f64>, y: &[f64], x: &[f64]) -> Vec<f64> {
+    (a * column(x)).iter().zip(y).map(|(f, y)| f - y).collect()
 }
 
 /// The zone of a residual: -1 or 1 on the linear parts, 0 on the quadratic part.
@@ -114,16 +116,13 @@ fn zone(r: f64, delta: f64) -> i8 {
 
 /// The unconstrained Huber regression; `None` if Newton's method does not end
 /// on a nonsingular zone pattern.
-fn huber_unconstrained(a: &Mat, y: &[f64], delta: f64) -> Option<Vec<f64>> {
-    let (m, p) = (a.rows, a.cols);
+fn huber_unconstrained(a: &DMatrix<f64>, y: &[f64], delta: f64) -> Option<Vec<f64>> {
+    let (m, p) = a.shape();
     if p == 0 {
         return Some(Vec::new());
     }
-    let mut x = match crate::linalg::least_squares(a, y) {
-        Some(ls) => ls.x,
-        None => vec![0.0; p],
-    };
-    let mut hessian = vec![0.0; p * p];
+    let mut x = least_squares(a, y).unwrap_or_else(|| vec![0.0; p]);
+    let mut hessian = DMatrix::zeros(p, p);
     let mut gradient = vec![0.0; p];
     for _ in 0..NEWTON_ITERATIONS {
         let r = residuals(a, y, &x);
@@ -133,36 +132,31 @@ fn huber_unconstrained(a: &Mat, y: &[f64], delta: f64) -> Option<Vec<f64>> {
             let psi = ri.clamp(-delta, delta);
             let quadratic = ri.abs() <= delta;
             for j in 0..p {
-                let aij = a.get(i, j);
+                let aij = a[(i, j)];
                 gradient[j] += psi * aij;
                 if quadratic {
                     for k in 0..=j {
-                        hessian[j * p + k] += aij * a.get(i, k);
+                        hessian[(j, k)] += aij * a[(i, k)];
                     }
                 }
             }
         }
-        for j in 0..p {
-            for k in 0..j {
-                hessian[k * p + j] = hessian[j * p + k];
-            }
-        }
+        hessian.fill_upper_triangle_with_lower_triangle();
         let rhs: Vec<f64> = gradient.iter().map(|g| -g).collect();
-        let (direction, exact) = match solve_dense(p, &hessian, &rhs) {
+        let (direction, exact) = match solve_dense(&hessian, &rhs) {
             Some(d) => (d, true),
             None => {
                 // Singular pattern (too few residuals in the quadratic zone):
                 // a regularised step still descends; the end must be exact.
-                let trace: f64 = (0..p).map(|j| hessian[j * p + j]).sum();
+                let mu = 1e-8 * hessian.trace().max(1e-300) + 1e-12;
                 let mut regularised = hessian.clone();
-                let mu = 1e-8 * trace.max(1e-300) + 1e-12;
                 for j in 0..p {
-                    regularised[j * p + j] += mu;
+                    regularised[(j, j)] += mu;
                 }
-                (solve_dense(p, &regularised, &rhs)?, false)
+                (solve_dense(&regularised, &rhs)?, false)
             }
         };
-        let c = a.mul_vec(&direction);
+        let c = a * column(&direction);
         let slope: f64 = gradient.iter().zip(&direction).map(|(g, d)| g * d).sum();
         if exact && (0..m).all(|i| zone(r[i] + c[i], delta) == zone(r[i], delta)) {
             for (xj, dj) in x.iter_mut().zip(&direction) {
@@ -173,7 +167,7 @@ fn huber_unconstrained(a: &Mat, y: &[f64], delta: f64) -> Option<Vec<f64>> {
         if slope.is_nan() || slope >= 0.0 {
             return None;
         }
-        let t = huber_line_search(&r, &c, delta, slope)?;
+        let t = huber_line_search(&r, c.as_slice(), delta, slope)?;
         for (xj, dj) in x.iter_mut().zip(&direction) {
             *xj += t * dj;
         }
@@ -219,42 +213,21 @@ fn huber_line_search(r: &[f64], c: &[f64], delta: f64, slope0: f64) -> Option<f6
     (curvature > 0.0).then(|| t - value / curvature)
 }
 
-/// Solves the `n x n` system by Gaussian elimination with partial pivoting;
-/// `None` if it is singular to working precision.
-fn solve_dense(n: usize, matrix: &[f64], rhs: &[f64]) -> Option<Vec<f64>> {
-    let mut m = matrix.to_vec();
-    let mut b = rhs.to_vec();
-    let largest = m.iter().map(|v| v.abs()).fold(0.0, f64::max);
+/// Solves the square system by LU with partial pivoting; `None` if a pivot is
+/// at most 1e-13 times the largest entry (singular to working precision).
+fn solve_dense(matrix: &DMatrix<f64>, rhs: &[f64]) -> Option<Vec<f64>> {
+    let largest = matrix.amax();
     if !(largest > 0.0 && largest.is_finite()) {
         return None;
     }
-    for k in 0..n {
-        let pivot = (k..n).max_by(|&i, &j| m[i * n + k].abs().total_cmp(&m[j * n + k].abs()))?;
-        if m[pivot * n + k].abs() <= 1e-13 * largest {
-            return None;
-        }
-        if pivot != k {
-            for col in 0..n {
-                m.swap(k * n + col, pivot * n + col);
-            }
-            b.swap(k, pivot);
-        }
-        for i in k + 1..n {
-            let factor = m[i * n + k] / m[k * n + k];
-            if factor != 0.0 {
-                for col in k..n {
-                    m[i * n + col] -= factor * m[k * n + col];
-                }
-                b[i] -= factor * b[k];
-            }
-        }
+    let lu = matrix.clone().lu();
+    if lu.u().diagonal().iter().any(|d| d.abs() <= 1e-13 * largest) {
+        return None;
     }
-    let mut x = vec![0.0; n];
-    for i in (0..n).rev() {
-        let s: f64 = (i + 1..n).map(|j| m[i * n + j] * x[j]).sum();
-        x[i] = (b[i] - s) / m[i * n + i];
-    }
-    x.iter().all(|v| v.is_finite()).then_some(x)
+    let x = lu.solve(&column(rhs))?;
+    x.iter()
+        .all(|v| v.is_finite())
+        .then(|| x.as_slice().to_vec())
 }
 
 /// A condition that fixes a vertex of the L1 problem.
@@ -269,8 +242,8 @@ enum Active {
 
 /// The L1 regression `min sum |a_i x - y_i|` with `x_j >= 0` where
 /// `bounded[j]`; `None` if the optimum could not be certified.
-pub(crate) fn l1(a: &Mat, y: &[f64], bounded: &[bool]) -> Option<Vec<f64>> {
-    let (m, p) = (a.rows, a.cols);
+pub(crate) fn l1(a: &DMatrix<f64>, y: &[f64], bounded: &[bool]) -> Option<Vec<f64>> {
+    let (m, p) = a.shape();
     if p == 0 || p > MAX_COLUMNS || m < p {
         return None;
     }
@@ -282,15 +255,15 @@ pub(crate) fn l1(a: &Mat, y: &[f64], bounded: &[bool]) -> Option<Vec<f64>> {
 /// curve measured, or symmetrised, as `f(-v) = -f(v)`), contribute
 /// `|a x - y|` twice: they are merged into one row of weight 2 (or more).
 /// Otherwise every vertex on such a row would be degenerate.
-fn merge_mirrored_rows(a: &Mat, y: &[f64]) -> (Mat, Vec<f64>, Vec<f64>) {
-    let (m, p) = (a.rows, a.cols);
+fn merge_mirrored_rows(a: &DMatrix<f64>, y: &[f64]) -> (DMatrix<f64>, Vec<f64>, Vec<f64>) {
+    let (m, p) = a.shape();
     let width = p + 1;
     // Sign-normalised rows (a_i, y_i): the first nonzero entry positive.
     let mut keys = vec![0.0; m * width];
     for i in 0..m {
         let row = &mut keys[i * width..(i + 1) * width];
         for (j, value) in row.iter_mut().take(p).enumerate() {
-            *value = a.get(i, j);
+            *value = a[(i, j)];
         }
         row[p] = y[i];
         let sign = row.iter().find(|v| **v != 0.0).map_or(1.0, |v| v.signum());
@@ -320,41 +293,36 @@ fn merge_mirrored_rows(a: &Mat, y: &[f64]) -> (Mat, Vec<f64>, Vec<f64>) {
     if kept.len() == m {
         return (a.clone(), y.to_vec(), vec![1.0; m]);
     }
-    let mut merged = Mat::zeros(kept.len(), p);
-    for (k, &i) in kept.iter().enumerate() {
-        for j in 0..p {
-            merged.set(k, j, a.get(i, j));
-        }
-    }
     let y = kept.iter().map(|&i| y[i]).collect();
-    (merged, y, weight)
+    (a.select_rows(&kept), y, weight)
 }
 
 /// A feasible starting vertex near the optimum: the `p` rows (independent)
 /// with the smallest residuals of the weighted least-squares fit, if the
 /// point they fix satisfies the bounds; otherwise `x = 0`, every column held.
-fn start_vertex(a: &Mat, y: &[f64], weight: &[f64], bounded: &[bool]) -> (Vec<Active>, Vec<f64>) {
-    let p = a.cols;
+fn start_vertex(
+    a: &DMatrix<f64>,
+    y: &[f64],
+    weight: &[f64],
+    bounded: &[bool],
+) -> (Vec<Active>, Vec<f64>) {
+    let p = a.ncols();
     let origin = ((0..p).map(Active::Column).collect(), vec![0.0; p]);
     let mut scaled = a.clone();
-    let mut rhs = y.to_vec();
-    for i in 0..a.rows {
-        for j in 0..p {
-            scaled.set(i, j, a.get(i, j) * weight[i]);
-        }
-        rhs[i] *= weight[i];
+    for (mut row, w) in scaled.row_iter_mut().zip(weight) {
+        row *= *w;
     }
-    let Some(ls) = crate::linalg::least_squares(&scaled, &rhs) else {
+    let rhs: Vec<f64> = y.iter().zip(weight).map(|(y, w)| y * w).collect();
+    let Some(ls) = least_squares(&scaled, &rhs) else {
         return origin;
     };
-    let r = residuals(a, y, &ls.x);
-    let mut order: Vec<usize> = (0..a.rows).collect();
+    let r = residuals(a, y, &ls);
+    let mut order: Vec<usize> = (0..a.nrows()).collect();
     order.sort_by(|&i, &k| r[i].abs().total_cmp(&r[k].abs()));
     let mut active = Vec::with_capacity(p);
     for &i in &order {
         active.push(Active::Row(i));
-        let independent =
-            solve_dense(active.len(), &gram(a, &active), &vec![1.0; active.len()]).is_some();
+        let independent = solve_dense(&gram(a, &active), &vec![1.0; active.len()]).is_some();
         if !independent {
             active.pop();
         }
@@ -372,26 +340,21 @@ fn start_vertex(a: &Mat, y: &[f64], weight: &[f64], bounded: &[bool]) -> (Vec<Ac
 }
 
 /// The Gram matrix of the rows of the active conditions (all rows here).
-fn gram(a: &Mat, active: &[Active]) -> Vec<f64> {
-    let n = active.len();
-    let row = |k: usize| match active[k] {
-        Active::Row(i) => i,
-        Active::Column(_) => unreachable!("only rows are tested for independence"),
-    };
-    let mut g = vec![0.0; n * n];
-    for u in 0..n {
-        for v in 0..n {
-            g[u * n + v] = (0..a.cols)
-                .map(|j| a.get(row(u), j) * a.get(row(v), j))
-                .sum();
-        }
-    }
-    g
+fn gram(a: &DMatrix<f64>, active: &[Active]) -> DMatrix<f64> {
+    let rows: Vec<usize> = active
+        .iter()
+        .map(|condition| match *condition {
+            Active::Row(i) => i,
+            Active::Column(_) => unreachable!("only rows are tested for independence"),
+        })
+        .collect();
+    let b = a.select_rows(&rows);
+    &b * b.transpose()
 }
 
 /// `min sum w_i |a_i x - y_i|` with `x_j >= 0` where `bounded[j]`.
-fn weighted_l1(a: &Mat, y: &[f64], weight: &[f64], bounded: &[bool]) -> Option<Vec<f64>> {
-    let (m, p) = (a.rows, a.cols);
+fn weighted_l1(a: &DMatrix<f64>, y: &[f64], weight: &[f64], bounded: &[bool]) -> Option<Vec<f64>> {
+    let (m, p) = a.shape();
     if m < p {
         return None;
     }
@@ -404,20 +367,14 @@ fn weighted_l1(a: &Mat, y: &[f64], weight: &[f64], bounded: &[bool]) -> Option<V
         for (i, &ri) in r.iter().enumerate() {
             if !on_row(i) && ri != 0.0 {
                 for (j, qj) in q.iter_mut().enumerate() {
-                    *qj += weight[i] * ri.signum() * a.get(i, j);
+                    *qj += weight[i] * ri.signum() * a[(i, j)];
                 }
             }
         }
         // Multipliers mu: C^T mu = -q, C the rows of the active conditions.
         let c = condition_matrix(a, &active);
-        let mut ct = vec![0.0; p * p];
-        for i in 0..p {
-            for j in 0..p {
-                ct[j * p + i] = c[i * p + j];
-            }
-        }
         let minus_q: Vec<f64> = q.iter().map(|v| -v).collect();
-        let mu = solve_dense(p, &ct, &minus_q)?;
+        let mu = solve_dense(&c.transpose(), &minus_q)?;
         let scale = 1.0 + q.iter().map(|v| v.abs()).fold(0.0, f64::max);
         // The most violated dual condition, with the direction that releases it.
         let mut worst: Option<(usize, f64, f64)> = None;
@@ -436,7 +393,7 @@ fn weighted_l1(a: &Mat, y: &[f64], weight: &[f64], bounded: &[bool]) -> Option<V
         };
         let mut unit = vec![0.0; p];
         unit[leaving] = sigma;
-        let direction = solve_dense(p, &c, &unit)?;
+        let direction = solve_dense(&c, &unit)?;
         let edge = Edge {
             r: &r,
             weight,
@@ -451,20 +408,20 @@ fn weighted_l1(a: &Mat, y: &[f64], weight: &[f64], bounded: &[bool]) -> Option<V
 }
 
 /// Rows of the active conditions: `a_i` for a zero residual, `e_j` for a held column.
-fn condition_matrix(a: &Mat, active: &[Active]) -> Vec<f64> {
-    let p = a.cols;
-    let mut c = vec![0.0; p * p];
+fn condition_matrix(a: &DMatrix<f64>, active: &[Active]) -> DMatrix<f64> {
+    let p = a.ncols();
+    let mut c = DMatrix::zeros(p, p);
     for (k, condition) in active.iter().enumerate() {
         match *condition {
-            Active::Row(i) => (0..p).for_each(|j| c[k * p + j] = a.get(i, j)),
-            Active::Column(j) => c[k * p + j] = 1.0,
+            Active::Row(i) => c.row_mut(k).copy_from(&a.row(i)),
+            Active::Column(j) => c[(k, j)] = 1.0,
         }
     }
     c
 }
 
 /// The point where all active conditions hold.
-fn vertex(a: &Mat, y: &[f64], active: &[Active]) -> Option<Vec<f64>> {
+fn vertex(a: &DMatrix<f64>, y: &[f64], active: &[Active]) -> Option<Vec<f64>> {
     let rhs: Vec<f64> = active
         .iter()
         .map(|condition| match *condition {
@@ -472,7 +429,7 @@ fn vertex(a: &Mat, y: &[f64], active: &[Active]) -> Option<Vec<f64>> {
             Active::Column(_) => 0.0,
         })
         .collect();
-    solve_dense(a.cols, &condition_matrix(a, active), &rhs)
+    solve_dense(&condition_matrix(a, active), &rhs)
 }
 
 /// An edge of the L1 problem: from `x` (residuals `r`) along `direction`.
@@ -490,12 +447,12 @@ impl Edge<'_> {
     /// unbounded along it.
     fn search(
         &self,
-        a: &Mat,
+        a: &DMatrix<f64>,
         bounded: &[bool],
         active: &[Active],
         leaving: usize,
     ) -> Option<Active> {
-        let c = a.mul_vec(self.direction);
+        let c = a * column(self.direction);
         // The first bound the edge runs into.
         let mut limit: Option<(f64, usize)> = None;
         for (j, (&xj, &dj)) in self.x.iter().zip(self.direction).enumerate() {
@@ -556,13 +513,8 @@ impl Edge<'_> {
 mod tests {
     use super::*;
 
-    fn design(rows: &[[f64; 2]]) -> Mat {
-        let mut a = Mat::zeros(rows.len(), 2);
-        for (i, row) in rows.iter().enumerate() {
-            a.set(i, 0, row[0]);
-            a.set(i, 1, row[1]);
-        }
-        a
+    fn design(rows: &[[f64; 2]]) -> DMatrix<f64> {
+        DMatrix::from_fn(rows.len(), 2, |i, j| rows[i][j])
     }
 
     #[test]

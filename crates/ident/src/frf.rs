@@ -27,11 +27,12 @@
 //! candidate with the smallest final error wins.
 
 use fistage_model::LugreParams;
+use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
-use crate::complex::Complex;
+use crate::Complex;
 use crate::error::{IdentError, Result};
-use crate::linalg::Mat;
+use crate::linalg::row_major;
 use crate::lm::levenberg_marquardt;
 use crate::qp::{RegressionLoss, regression};
 use crate::stribeck::line_span;
@@ -97,7 +98,7 @@ impl FrfData {
             response: self
                 .response
                 .iter()
-                .map(|g| Complex::new(g.abs(), 0.0))
+                .map(|g| Complex::new(g.norm(), 0.0))
                 .collect(),
             has_phase: false,
             ..self.clone()
@@ -150,7 +151,7 @@ impl FrfData {
             ));
         }
         let g = self.response[i];
-        if !(g.re.is_finite() && g.im.is_finite()) || g.abs() == 0.0 {
+        if !(g.re.is_finite() && g.im.is_finite()) || g.norm() == 0.0 {
             return Err(cell(
                 &self.response_column,
                 format!(
@@ -322,7 +323,7 @@ impl FrfFit {
             self.damping.value,
             self.mass.value,
         )
-        .recip()
+        .inv()
     }
 
     /// LuGre parameters with sigma0 and, when sigma2 was given, sigma1 replaced.
@@ -410,7 +411,7 @@ pub fn fit_frf(data: &FrfData, options: &FrfOptions) -> Result<FrfFit> {
 /// noise far from it). Data whose phase leads on balance were exported with
 /// the opposite sign convention.
 fn check_phase_convention(data: &FrfData) -> Result<()> {
-    let balance: f64 = data.response.iter().map(|g| g.im / g.abs()).sum();
+    let balance: f64 = data.response.iter().map(|g| g.im / g.norm()).sum();
     if balance > 0.0 {
         let leading = data.response.iter().filter(|g| g.im > 0.0).count();
         return Err(IdentError::InsufficientData {
@@ -482,15 +483,15 @@ impl Problem<'_> {
     fn complex_linear_estimate(&self) -> std::result::Result<[f64; 3], String> {
         let n = self.omega.len();
         let cols = self.n_params();
-        let mut a = Mat::zeros(2 * n, cols);
+        let mut a = DMatrix::zeros(2 * n, cols);
         let mut y = vec![0.0; 2 * n];
         for (k, (&w, &g)) in self.omega.iter().zip(self.response).enumerate() {
             // G (sigma0 + j w c - M w^2) = 1, split into real and imaginary rows.
             let (re, im) = (2 * k, 2 * k + 1);
-            a.set(re, 0, g.re);
-            a.set(re, 1, -g.im * w);
-            a.set(im, 0, g.im);
-            a.set(im, 1, g.re * w);
+            a[(re, 0)] = g.re;
+            a[(re, 1)] = -g.im * w;
+            a[(im, 0)] = g.im;
+            a[(im, 1)] = g.re * w;
             y[re] = 1.0;
             match self.known_mass {
                 Some(m) => {
@@ -498,8 +499,8 @@ impl Problem<'_> {
                     y[im] += g.im * m * w * w;
                 }
                 None => {
-                    a.set(re, 2, -g.re * w * w);
-                    a.set(im, 2, -g.im * w * w);
+                    a[(re, 2)] = -g.re * w * w;
+                    a[(im, 2)] = -g.im * w * w;
                 }
             }
         }
@@ -511,15 +512,15 @@ impl Problem<'_> {
         // (alpha + beta w^2 + gamma w^4) |G|^2 = 1 with alpha = sigma0^2,
         // beta = c^2 - 2 sigma0 M, gamma = M^2.
         let cols = self.n_params();
-        let mut a = Mat::zeros(self.omega.len(), cols);
+        let mut a = DMatrix::zeros(self.omega.len(), cols);
         let mut y = vec![1.0; self.omega.len()];
         for (k, (&w, &g)) in self.omega.iter().zip(self.response).enumerate() {
             let g2 = g.norm_sqr();
-            a.set(k, 0, g2);
-            a.set(k, 1, g2 * w * w);
+            a[(k, 0)] = g2;
+            a[(k, 1)] = g2 * w * w;
             match self.known_mass {
                 Some(m) => y[k] -= m * m * w.powi(4) * g2,
-                None => a.set(k, 2, g2 * w.powi(4)),
+                None => a[(k, 2)] = g2 * w.powi(4),
             }
         }
         let nonnegative = [true, false, true];
@@ -542,16 +543,16 @@ impl Problem<'_> {
                 }
             })
         };
-        let magnitudes: Vec<f64> = self.response.iter().map(|g| g.abs()).collect();
+        let magnitudes: Vec<f64> = self.response.iter().map(|g| g.norm()).collect();
         let low = index_of(|a, b| a < b, self.omega);
         let high = index_of(|a, b| a > b, self.omega);
         let peak = index_of(|a, b| a > b, &magnitudes);
-        let sigma0 = 1.0 / self.response[low].abs();
+        let sigma0 = 1.0 / self.response[low].norm();
         let w_high = self.omega[high];
         let mass = self
             .known_mass
-            .unwrap_or_else(|| 1.0 / (self.response[high].abs() * w_high * w_high));
-        let damping = 1.0 / (self.response[peak].abs() * self.omega[peak]);
+            .unwrap_or_else(|| 1.0 / (self.response[high].norm() * w_high * w_high));
+        let damping = 1.0 / (self.response[peak].norm() * self.omega[peak]);
         [sigma0, damping, mass]
     }
 
@@ -573,14 +574,14 @@ impl Problem<'_> {
         r.clear();
         for (&w, &g) in self.omega.iter().zip(self.response) {
             let p = g * model_denominator(w, sigma0, damping, mass);
-            r.push(weights[0] * p.abs().ln());
+            r.push(weights[0] * p.norm().ln());
             if self.use_phase {
                 r.push(weights[1] * p.arg());
             }
         }
     }
 
-    fn jacobian(&self, q: &[f64], weights: [f64; 2], j: &mut Mat) {
+    fn jacobian(&self, q: &[f64], weights: [f64; 2], j: &mut DMatrix<f64>) {
         let [sigma0, damping, mass] = self.natural(q);
         let rows_per_point = if self.use_phase { 2 } else { 1 };
         for (k, &w) in self.omega.iter().enumerate() {
@@ -592,9 +593,9 @@ impl Problem<'_> {
             ];
             for (col, dd) in partials.iter().take(self.n_params()).enumerate() {
                 let ratio = *dd / d;
-                j.set(rows_per_point * k, col, weights[0] * ratio.re);
+                j[(rows_per_point * k, col)] = weights[0] * ratio.re;
                 if self.use_phase {
-                    j.set(rows_per_point * k + 1, col, weights[1] * ratio.im);
+                    j[(rows_per_point * k + 1, col)] = weights[1] * ratio.im;
                 }
             }
         }
@@ -628,16 +629,14 @@ impl Problem<'_> {
         let natural = self.natural(q);
         let mut r = Vec::new();
         self.residuals(q, weights, &mut r);
-        let mut j = Mat::zeros(r.len(), p);
+        let mut j = DMatrix::zeros(r.len(), p);
         self.jacobian(q, weights, &mut j);
         // From d/d(ln x) to d/dx.
-        for row in 0..j.rows {
-            for (col, value) in natural.iter().enumerate().take(p) {
-                j.set(row, col, j.get(row, col) / value);
-            }
+        for (mut col, value) in j.column_iter_mut().zip(&natural) {
+            col /= *value;
         }
         let covariance = least_squares_covariance(&j, &r);
-        let errors = standard_errors(p, covariance.as_deref());
+        let errors = standard_errors(p, covariance.as_ref());
         let dof = r.len() - p;
         let t = t95(dof as f64);
         let sigma0 = Estimate::new(natural[0], errors[0], t, 0.0);
@@ -655,7 +654,7 @@ impl Problem<'_> {
             mass_fitted: self.known_mass.is_none(),
             sigma1,
             sigma2: sigma2_estimate,
-            covariance,
+            covariance: covariance.as_ref().map(row_major),
             used_phase: self.use_phase,
             residuals: self.residual_stats(data, q, dof),
             weights,
@@ -672,16 +671,16 @@ impl Problem<'_> {
         for (&w, &g) in self.omega.iter().zip(self.response) {
             let d = model_denominator(w, sigma0, damping, mass);
             let p = g * d;
-            mag_db.push(db_per_neper * p.abs().ln());
+            mag_db.push(db_per_neper * p.norm().ln());
             phase_deg.push(p.arg().to_degrees());
-            relative.push((p - Complex::new(1.0, 0.0)).abs());
+            relative.push((p - Complex::new(1.0, 0.0)).norm());
         }
         let rms = |x: &[f64]| (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt();
         let max_abs = |x: &[f64]| x.iter().map(|v| v.abs()).fold(0.0, f64::max);
         let measured_db: Vec<f64> = self
             .response
             .iter()
-            .map(|g| db_per_neper * g.abs().ln())
+            .map(|g| db_per_neper * g.norm().ln())
             .collect();
         let mean_db = measured_db.iter().sum::<f64>() / measured_db.len() as f64;
         let sst: f64 = measured_db.iter().map(|v| (v - mean_db).powi(2)).sum();

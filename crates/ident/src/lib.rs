@@ -9,8 +9,6 @@
 //! * [`frf`] fits sigma0, sigma1 + sigma2 (and the mass) to the pre-motion FRF;
 //! * [`uncertainty`] gives 95% intervals and residual statistics;
 //! * [`synth`] makes seeded synthetic data from known parameters;
-//! * [`lab`] measures f_ss(v) and the FRF on the simulated stage (fistage's own
-//!   engine), as a lab would, sensor errors included;
 //! * [`report`] turns fits into JSON, a table and a scenario override.
 //!
 //! ```
@@ -25,12 +23,10 @@
 
 #![warn(missing_docs)]
 
-mod complex;
 pub mod csv_input;
 mod error;
 mod exact;
 pub mod frf;
-pub mod lab;
 mod linalg;
 mod lm;
 mod qp;
@@ -40,12 +36,13 @@ pub mod synth;
 pub mod uncertainty;
 pub mod units;
 
-pub use complex::Complex;
 pub use csv_input::{
     UnitOverrides, parse_frf_csv, parse_stribeck_csv, read_frf_csv, read_stribeck_csv,
 };
 pub use error::{IdentError, Result};
 pub use frf::{FrfData, FrfFit, FrfOptions, FrfStart, MassOption, Sigma2Input, fit_frf};
+/// A complex number `re + j im` (frequency responses).
+pub use num_complex::Complex64 as Complex;
 pub use report::{FrfReport, StribeckReport, frf_override, stribeck_override};
 pub use stribeck::{
     AsymmetricFit, AsymmetryTest, Loss, StribeckData, StribeckFit, StribeckOptions, fit_stribeck,

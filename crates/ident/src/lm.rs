@@ -1,7 +1,9 @@
 //! Levenberg-Marquardt for small nonlinear least-squares problems, and Brent's
 //! derivative-free minimiser for one variable.
 
-use crate::linalg::{Mat, least_squares};
+use nalgebra::DMatrix;
+
+use crate::linalg::least_squares;
 
 /// Result of a Levenberg-Marquardt run.
 #[derive(Debug, Clone)]
@@ -17,7 +19,7 @@ pub(crate) struct LmOutcome {
 pub(crate) fn levenberg_marquardt(
     start: &[f64],
     mut residuals: impl FnMut(&[f64], &mut Vec<f64>),
-    mut jacobian: impl FnMut(&[f64], &mut Mat),
+    mut jacobian: impl FnMut(&[f64], &mut DMatrix<f64>),
     max_iterations: usize,
 ) -> LmOutcome {
     let p_len = start.len();
@@ -33,25 +35,20 @@ pub(crate) fn levenberg_marquardt(
         };
     }
     let m = r.len();
-    let mut jac = Mat::zeros(m, p_len);
+    let mut jac = DMatrix::zeros(m, p_len);
     let mut lambda: f64 = 1e-3;
     let mut trial_r = Vec::new();
     let mut iterations = 0;
     while iterations < max_iterations && ssr > 0.0 {
         iterations += 1;
         jacobian(&params, &mut jac);
-        let norms = jac.column_norms();
-        let mut augmented = Mat::zeros(m + p_len, p_len);
-        let mut rhs = vec![0.0; m + p_len];
-        for i in 0..m {
-            for j in 0..p_len {
-                augmented.set(i, j, jac.get(i, j));
-            }
-            rhs[i] = -r[i];
+        let mut augmented = DMatrix::zeros(m + p_len, p_len);
+        augmented.rows_mut(0, m).copy_from(&jac);
+        for (j, c) in jac.column_iter().enumerate() {
+            augmented[(m + j, j)] = lambda.sqrt() * c.norm().max(1e-300);
         }
-        for (j, norm) in norms.iter().enumerate() {
-            augmented.set(m + j, j, lambda.sqrt() * norm.max(1e-300));
-        }
+        let mut rhs: Vec<f64> = r.iter().map(|v| -v).collect();
+        rhs.resize(m + p_len, 0.0);
         let Some(step) = least_squares(&augmented, &rhs) else {
             lambda *= 10.0;
             if lambda > 1e16 {
@@ -59,12 +56,12 @@ pub(crate) fn levenberg_marquardt(
             }
             continue;
         };
-        let trial: Vec<f64> = params.iter().zip(&step.x).map(|(p, d)| p + d).collect();
+        let trial: Vec<f64> = params.iter().zip(&step).map(|(p, d)| p + d).collect();
         residuals(&trial, &mut trial_r);
         let trial_ssr = sum_of_squares(&trial_r);
         if trial_ssr.is_finite() && trial_ssr < ssr {
             let decrease = ssr - trial_ssr;
-            let step_size = step.x.iter().map(|d| d * d).sum::<f64>().sqrt();
+            let step_size = step.iter().map(|d| d * d).sum::<f64>().sqrt();
             let size = params.iter().map(|p| p * p).sum::<f64>().sqrt();
             params = trial;
             std::mem::swap(&mut r, &mut trial_r);
@@ -208,8 +205,8 @@ mod tests {
             },
             |p, j| {
                 for (i, t) in t.iter().enumerate() {
-                    j.set(i, 0, (-p[1] * t).exp());
-                    j.set(i, 1, -p[0] * t * (-p[1] * t).exp());
+                    j[(i, 0)] = (-p[1] * t).exp();
+                    j[(i, 1)] = -p[0] * t * (-p[1] * t).exp();
                 }
             },
             200,

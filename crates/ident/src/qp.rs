@@ -29,7 +29,9 @@ use clarabel::solver::{
 use std::cell::Cell;
 
 use crate::exact;
-use crate::linalg::{Mat, least_squares};
+use nalgebra::DMatrix;
+
+use crate::linalg::{column, least_squares};
 
 /// How the robust programs are solved.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -94,7 +96,7 @@ const NEGLIGIBLE_COLUMN: f64 = 1e-12;
 /// Fits `y ~ A x` with `x_j >= 0` where `nonnegative[j]`. Returns x, or the
 /// solver's complaint.
 pub(crate) fn regression(
-    a: &Mat,
+    a: &DMatrix<f64>,
     y: &[f64],
     nonnegative: &[bool],
     loss: RegressionLoss,
@@ -104,27 +106,25 @@ pub(crate) fn regression(
 
 /// [`regression`] with a choice of solver for the robust programs.
 pub(crate) fn regression_with(
-    a: &Mat,
+    a: &DMatrix<f64>,
     y: &[f64],
     nonnegative: &[bool],
     loss: RegressionLoss,
     method: Method,
 ) -> Result<Vec<f64>, String> {
-    let norms = a.column_norms();
+    let norms: Vec<f64> = a.column_iter().map(|c| c.norm()).collect();
     let largest = norms.iter().copied().fold(0.0, f64::max);
-    let active: Vec<usize> = (0..a.cols)
+    let active: Vec<usize> = (0..a.ncols())
         .filter(|&c| norms[c] > NEGLIGIBLE_COLUMN * largest && norms[c].is_finite())
         .collect();
-    let mut x = vec![0.0; a.cols];
+    let mut x = vec![0.0; a.ncols()];
     let y_scale = y.iter().map(|v| v * v).sum::<f64>().sqrt();
     if active.is_empty() || y_scale == 0.0 {
         return Ok(x);
     }
     let mut scaled = a.select_columns(&active);
-    for r in 0..scaled.rows {
-        for (k, &c) in active.iter().enumerate() {
-            scaled.set(r, k, a.get(r, c) / norms[c]);
-        }
+    for (mut col, &c) in scaled.column_iter_mut().zip(&active) {
+        col /= norms[c];
     }
     let y_scaled: Vec<f64> = y.iter().map(|v| v / y_scale).collect();
     let bounded: Vec<bool> = active.iter().map(|&c| nonnegative[c]).collect();
@@ -270,12 +270,11 @@ fn upper_triangle(n: usize, entry: impl Fn(usize, usize) -> f64) -> CscMatrix<f6
     CscMatrix::new_from_triplets(n, n, rows, cols, values)
 }
 
-fn solve_l2(a: &Mat, y: &[f64], bounded: &[bool]) -> Result<Vec<f64>, String> {
-    let n = a.cols;
-    let columns: Vec<Vec<f64>> = (0..n).map(|c| a.column(c)).collect();
-    let dot = |u: &[f64], v: &[f64]| u.iter().zip(v).map(|(a, b)| a * b).sum::<f64>();
-    let p = upper_triangle(n, |i, j| dot(&columns[i], &columns[j]));
-    let q: Vec<f64> = columns.iter().map(|c| -dot(c, y)).collect();
+fn solve_l2(a: &DMatrix<f64>, y: &[f64], bounded: &[bool]) -> Result<Vec<f64>, String> {
+    let n = a.ncols();
+    let gram = a.tr_mul(a);
+    let p = upper_triangle(n, |i, j| gram[(i, j)]);
+    let q: Vec<f64> = a.tr_mul(&column(y)).iter().map(|v| -v).collect();
     let mut constraints = Constraints::new();
     constraints.add_nonnegative(bounded);
     let x = solve(&p, &q, &constraints, false)?;
@@ -284,44 +283,39 @@ fn solve_l2(a: &Mat, y: &[f64], bounded: &[bool]) -> Result<Vec<f64>, String> {
 
 /// Exact least squares on the free set suggested by the interior-point solution,
 /// kept only if it is feasible and satisfies the KKT sign conditions.
-fn polish_l2(a: &Mat, y: &[f64], bounded: &[bool], x: &[f64]) -> Option<Vec<f64>> {
+fn polish_l2(a: &DMatrix<f64>, y: &[f64], bounded: &[bool], x: &[f64]) -> Option<Vec<f64>> {
     let largest = x.iter().map(|v| v.abs()).fold(0.0, f64::max);
     let at_bound = |j: usize| bounded[j] && x[j] <= 1e-6 * largest.max(1e-12);
-    let free: Vec<usize> = (0..a.cols).filter(|&j| !at_bound(j)).collect();
-    let mut polished = vec![0.0; a.cols];
+    let free: Vec<usize> = (0..a.ncols()).filter(|&j| !at_bound(j)).collect();
+    let mut polished = vec![0.0; a.ncols()];
     if !free.is_empty() {
         let sub = a.select_columns(&free);
         let ls = least_squares(&sub, y)?;
         for (k, &j) in free.iter().enumerate() {
-            if bounded[j] && ls.x[k] < 0.0 {
+            if bounded[j] && ls[k] < 0.0 {
                 return None;
             }
-            polished[j] = ls.x[k];
+            polished[j] = ls[k];
         }
     }
     // Gradient of 1/2 |A x - y|^2 must be >= 0 on the bound variables.
-    let residual: Vec<f64> = a
-        .mul_vec(&polished)
-        .iter()
-        .zip(y)
-        .map(|(f, y)| f - y)
-        .collect();
-    let gradient = a.tr_mul_vec(&residual);
+    let residual = a * column(&polished) - column(y);
+    let gradient = a.tr_mul(&residual);
     let tolerance = 1e-8 * (1.0 + y.iter().map(|v| v.abs()).fold(0.0, f64::max));
-    if (0..a.cols).any(|j| at_bound(j) && gradient[j] < -tolerance) {
+    if (0..a.ncols()).any(|j| at_bound(j) && gradient[j] < -tolerance) {
         return None;
     }
     Some(polished)
 }
 
 fn solve_huber(
-    a: &Mat,
+    a: &DMatrix<f64>,
     y: &[f64],
     bounded: &[bool],
     delta: f64,
     tight: bool,
 ) -> Result<Vec<f64>, String> {
-    let (m, p) = (a.rows, a.cols);
+    let (m, p) = a.shape();
     // Variables: x (p), u (m), t (m).
     let n = p + 2 * m;
     let u = |i: usize| p + i;
@@ -339,9 +333,9 @@ fn solve_huber(
     }
     let mut constraints = Constraints::new();
     for (i, &yi) in y.iter().enumerate() {
-        let row = (0..p).map(|j| (j, a.get(i, j)));
+        let row = (0..p).map(|j| (j, a[(i, j)]));
         constraints.add_le(row.chain([(u(i), -1.0), (t(i), -1.0)]), yi);
-        let row = (0..p).map(|j| (j, -a.get(i, j)));
+        let row = (0..p).map(|j| (j, -a[(i, j)]));
         constraints.add_le(row.chain([(u(i), 1.0), (t(i), -1.0)]), -yi);
     }
     constraints.add_nonnegative(bounded);
@@ -349,8 +343,13 @@ fn solve_huber(
     Ok(x[..p].to_vec())
 }
 
-fn solve_l1(a: &Mat, y: &[f64], bounded: &[bool], tight: bool) -> Result<Vec<f64>, String> {
-    let (m, p) = (a.rows, a.cols);
+fn solve_l1(
+    a: &DMatrix<f64>,
+    y: &[f64],
+    bounded: &[bool],
+    tight: bool,
+) -> Result<Vec<f64>, String> {
+    let (m, p) = a.shape();
     // Variables: x (p), t (m).
     let n = p + m;
     let t = |i: usize| p + i;
@@ -361,9 +360,9 @@ fn solve_l1(a: &Mat, y: &[f64], bounded: &[bool], tight: bool) -> Result<Vec<f64
     }
     let mut constraints = Constraints::new();
     for (i, &yi) in y.iter().enumerate() {
-        let row = (0..p).map(|j| (j, a.get(i, j)));
+        let row = (0..p).map(|j| (j, a[(i, j)]));
         constraints.add_le(row.chain([(t(i), -1.0)]), yi);
-        let row = (0..p).map(|j| (j, -a.get(i, j)));
+        let row = (0..p).map(|j| (j, -a[(i, j)]));
         constraints.add_le(row.chain([(t(i), -1.0)]), -yi);
     }
     constraints.add_nonnegative(bounded);
@@ -375,14 +374,14 @@ fn solve_l1(a: &Mat, y: &[f64], bounded: &[bool], tight: bool) -> Result<Vec<f64
 mod tests {
     use super::*;
 
-    fn line_data(outlier: f64) -> (Mat, Vec<f64>) {
+    fn line_data(outlier: f64) -> (DMatrix<f64>, Vec<f64>) {
         let n = 21;
-        let mut a = Mat::zeros(n, 2);
+        let mut a = DMatrix::zeros(n, 2);
         let mut y = vec![0.0; n];
         for (i, yi) in y.iter_mut().enumerate() {
             let t = i as f64 / 10.0;
-            a.set(i, 0, 1.0);
-            a.set(i, 1, t);
+            a[(i, 0)] = 1.0;
+            a[(i, 1)] = t;
             *yi = 1.0 + 2.0 * t + 0.01 * ((i * 7) % 5) as f64 - 0.02;
         }
         y[5] += outlier;
@@ -391,11 +390,11 @@ mod tests {
 
     #[test]
     fn l2_is_exact_on_exact_data() {
-        let mut a = Mat::zeros(4, 2);
+        let mut a = DMatrix::zeros(4, 2);
         let mut y = vec![0.0; 4];
         for (i, yi) in y.iter_mut().enumerate() {
-            a.set(i, 0, 1.0);
-            a.set(i, 1, i as f64);
+            a[(i, 0)] = 1.0;
+            a[(i, 1)] = i as f64;
             *yi = 0.5 + 3.0 * i as f64;
         }
         let x = regression(&a, &y, &[true, true], RegressionLoss::L2).unwrap();
@@ -408,11 +407,11 @@ mod tests {
     #[test]
     fn bounds_hold_and_polish_keeps_them() {
         // The unconstrained intercept would be negative.
-        let mut a = Mat::zeros(3, 2);
+        let mut a = DMatrix::zeros(3, 2);
         let y = vec![-0.5, 1.0, 2.5];
         for i in 0..3 {
-            a.set(i, 0, 1.0);
-            a.set(i, 1, i as f64);
+            a[(i, 0)] = 1.0;
+            a[(i, 1)] = i as f64;
         }
         let x = regression(&a, &y, &[true, false], RegressionLoss::L2).unwrap();
         assert_eq!(x[0], 0.0);

@@ -598,17 +598,17 @@ pub fn frf_data_vs_fit_csv(data: &FrfData, fit: &FrfFit) -> String {
             writeln!(
                 out,
                 "{line},{f_hz:?},{:?},{:?},{:?},{:?}",
-                g.abs(),
+                g.norm(),
                 phase.to_degrees(),
-                model.abs(),
+                model.norm(),
                 model_phase.to_degrees()
             )
         } else {
             writeln!(
                 out,
                 "{line},{f_hz:?},{:?},{:?},{:?}",
-                g.abs(),
-                model.abs(),
+                g.norm(),
+                model.norm(),
                 model_phase.to_degrees()
             )
         };
@@ -628,7 +628,7 @@ pub fn frf_curve_csv(data: &FrfData, fit: &FrfFit, points: usize) -> String {
             out,
             "{:?},{:?},{:?}",
             w / (2.0 * std::f64::consts::PI),
-            g.abs(),
+            g.norm(),
             g.arg().to_degrees()
         );
     }

@@ -34,7 +34,9 @@ use fistage_model::LugreParams;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{IdentError, Result};
-use crate::linalg::Mat;
+use nalgebra::{DMatrix, DVector};
+
+use crate::linalg::row_major;
 use crate::lm::brent_minimize;
 use crate::qp::{Method, RegressionLoss, regression_with};
 use crate::uncertainty::{
@@ -546,13 +548,13 @@ impl Profile<'_> {
 }
 
 /// Columns sgn(v), sgn(v) exp(-(v/v_s)^2), v.
-fn linear_design(v: &[f64], v_s: f64) -> Mat {
-    let mut a = Mat::zeros(v.len(), 3);
+fn linear_design(v: &[f64], v_s: f64) -> DMatrix<f64> {
+    let mut a = DMatrix::zeros(v.len(), 3);
     for (i, &vi) in v.iter().enumerate() {
         let r = vi / v_s;
-        a.set(i, 0, vi.signum());
-        a.set(i, 1, vi.signum() * (-r * r).exp());
-        a.set(i, 2, vi);
+        a[(i, 0)] = vi.signum();
+        a[(i, 1)] = vi.signum() * (-r * r).exp();
+        a[(i, 2)] = vi;
     }
     a
 }
@@ -566,16 +568,16 @@ fn residuals(v: &[f64], f: &[f64], theta: &[f64; 3], v_s: f64) -> Vec<f64> {
 }
 
 /// Jacobian of the model with respect to (f_c, f_s, v_s, sigma2).
-fn jacobian(v: &[f64], theta: &[f64; 3], v_s: f64) -> Mat {
-    let mut j = Mat::zeros(v.len(), STRIBECK_PARAMS);
+fn jacobian(v: &[f64], theta: &[f64; 3], v_s: f64) -> DMatrix<f64> {
+    let mut j = DMatrix::zeros(v.len(), STRIBECK_PARAMS);
     for (i, &vi) in v.iter().enumerate() {
         let r = vi / v_s;
         let e = (-r * r).exp();
         let s = vi.signum();
-        j.set(i, 0, s * (1.0 - e));
-        j.set(i, 1, s * e);
-        j.set(i, 2, s * theta[1] * e * 2.0 * r * r / v_s);
-        j.set(i, 3, vi);
+        j[(i, 0)] = s * (1.0 - e);
+        j[(i, 1)] = s * e;
+        j[(i, 2)] = s * theta[1] * e * 2.0 * r * r / v_s;
+        j[(i, 3)] = vi;
     }
     j
 }
@@ -591,7 +593,7 @@ fn build_fit(
     let r = residuals(&data.velocity, &data.force, &point.theta, point.v_s);
     let j = jacobian(&data.velocity, &point.theta, point.v_s);
     let covariance = stribeck_covariance(&j, &r, loss);
-    let errors = standard_errors(STRIBECK_PARAMS, covariance.as_deref());
+    let errors = standard_errors(STRIBECK_PARAMS, covariance.as_ref());
     let t = t95((data.len() - STRIBECK_PARAMS) as f64);
     let [f_c, excess, sigma2] = point.theta;
     let values = [f_c, f_c + excess, point.v_s, sigma2];
@@ -601,7 +603,7 @@ fn build_fit(
         f_s: estimate(1),
         v_s: estimate(2),
         sigma2: estimate(3),
-        covariance,
+        covariance: covariance.as_ref().map(row_major),
         loss: match loss {
             RegressionLoss::L2 => Loss::L2,
             RegressionLoss::Huber(_) => Loss::Huber,
@@ -622,8 +624,8 @@ fn build_fit(
 /// The covariance for the loss; if the full Jacobian is singular (no Stribeck
 /// hump, so v_s is undetermined), the other parameters' block with v_s's row
 /// and column left at NaN.
-fn stribeck_covariance(j: &Mat, r: &[f64], loss: RegressionLoss) -> Option<Vec<f64>> {
-    let covariance = |j: &Mat| match loss {
+fn stribeck_covariance(j: &DMatrix<f64>, r: &[f64], loss: RegressionLoss) -> Option<DMatrix<f64>> {
+    let covariance = |j: &DMatrix<f64>| match loss {
         RegressionLoss::L2 => least_squares_covariance(j, r),
         RegressionLoss::Huber(delta) => huber_covariance(j, r, delta),
         RegressionLoss::L1 => huber_covariance(j, r, 1.345 * mad_scale(r)),
@@ -633,10 +635,10 @@ fn stribeck_covariance(j: &Mat, r: &[f64], loss: RegressionLoss) -> Option<Vec<f
     }
     let keep = [0, 1, 3];
     let reduced = covariance(&j.select_columns(&keep))?;
-    let mut full = vec![f64::NAN; STRIBECK_PARAMS * STRIBECK_PARAMS];
+    let mut full = DMatrix::from_element(STRIBECK_PARAMS, STRIBECK_PARAMS, f64::NAN);
     for (a, &i) in keep.iter().enumerate() {
         for (b, &k) in keep.iter().enumerate() {
-            full[i * STRIBECK_PARAMS + k] = reduced[a * keep.len() + b];
+            full[(i, k)] = reduced[(a, b)];
         }
     }
     Some(full)
@@ -784,21 +786,13 @@ fn wald_test(pos: &StribeckFit, neg: &StribeckFit, alpha: f64) -> AsymmetryTest 
         .filter(|&i| cp[i * p + i].is_finite() && cn[i * p + i].is_finite())
         .collect();
     let k = usable.len();
-    let mut sum = vec![0.0; k * k];
-    for (a, &i) in usable.iter().enumerate() {
-        for (b, &j) in usable.iter().enumerate() {
-            sum[a * k + b] = cp[i * p + j] + cn[i * p + j];
-        }
-    }
-    let diff: Vec<f64> = usable.iter().map(|&i| ep[i].value - en[i].value).collect();
-    let statistic = match crate::linalg::spd_inverse(k, &sum) {
-        Some(inv) => (0..k)
-            .map(|a| {
-                (0..k)
-                    .map(|b| diff[a] * inv[a * k + b] * diff[b])
-                    .sum::<f64>()
-            })
-            .sum(),
+    let sum = DMatrix::from_fn(k, k, |a, b| {
+        let (i, j) = (usable[a], usable[b]);
+        cp[i * p + j] + cn[i * p + j]
+    });
+    let diff = DVector::from_iterator(k, usable.iter().map(|&i| ep[i].value - en[i].value));
+    let statistic = match sum.cholesky() {
+        Some(factor) => diff.dot(&factor.solve(&diff)),
         None => f64::NAN,
     };
     let p_value = chi_squared_sf(statistic, k as f64);
@@ -815,6 +809,7 @@ fn wald_test(pos: &StribeckFit, neg: &StribeckFit, alpha: f64) -> AsymmetryTest 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::linalg::{column, inverse_normal, least_squares};
 
     fn exact(params: &LugreParams, v: &[f64]) -> StribeckData {
         let f = v.iter().map(|&v| params.steady_state_force(v)).collect();
@@ -840,9 +835,9 @@ mod tests {
                     - f(down[0], down[1], down[2], down[3], x))
                     / (2.0 * h);
                 assert!(
-                    (fd - j.get(i, k)).abs() < 1e-6 * (1.0 + fd.abs()),
+                    (fd - j[(i, k)]).abs() < 1e-6 * (1.0 + fd.abs()),
                     "{i} {k}: {fd} vs {}",
-                    j.get(i, k)
+                    j[(i, k)]
                 );
             }
         }
@@ -876,39 +871,38 @@ mod tests {
     /// Clarabel's solution polished on its own pattern: the residuals inside
     /// the Huber threshold and the columns at their bound fix a linear system
     /// whose solution is the exact optimum if the pattern is right (checked).
-    fn polished_huber(a: &Mat, y: &[f64], x: &[f64], delta: f64) -> Option<Vec<f64>> {
+    fn polished_huber(a: &DMatrix<f64>, y: &[f64], x: &[f64], delta: f64) -> Option<Vec<f64>> {
         let largest = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let free: Vec<usize> = (0..3).filter(|&j| x[j] > 1e-9 * largest).collect();
-        let r: Vec<f64> = a.mul_vec(x).iter().zip(y).map(|(f, y)| f - y).collect();
+        let r: Vec<f64> = (a * column(x) - column(y)).iter().copied().collect();
         let inside: Vec<usize> = (0..y.len()).filter(|&i| r[i].abs() <= delta).collect();
         // Normal equations on the free columns, rows inside the threshold.
-        let mut sub = Mat::zeros(inside.len(), free.len());
+        let mut sub = DMatrix::zeros(inside.len(), free.len());
         let mut rhs = vec![0.0; inside.len()];
         let mut shift = vec![0.0; free.len()];
         for (i, &ri) in r.iter().enumerate() {
             if ri.abs() > delta {
                 for (k, &j) in free.iter().enumerate() {
-                    shift[k] += delta * ri.signum() * a.get(i, j);
+                    shift[k] += delta * ri.signum() * a[(i, j)];
                 }
             }
         }
         for (row, &i) in inside.iter().enumerate() {
             for (k, &j) in free.iter().enumerate() {
-                sub.set(row, k, a.get(i, j));
+                sub[(row, k)] = a[(i, j)];
             }
             rhs[row] = y[i];
         }
-        let ls = crate::linalg::least_squares(&sub, &rhs)?;
-        // Solve (S'S) z = S'y - shift: z = ls.x - (S'S)^-1 shift.
+        let ls = least_squares(&sub, &rhs)?;
+        let inverse_normal = inverse_normal(&sub)?;
+        // Solve (S'S) z = S'y - shift: z = ls - (S'S)^-1 shift.
         let n = free.len();
         let mut out = vec![0.0; 3];
         for k in 0..n {
-            let correction: f64 = (0..n)
-                .map(|l| ls.inverse_normal[k * n + l] * shift[l])
-                .sum();
-            out[free[k]] = ls.x[k] - correction;
+            let correction: f64 = (0..n).map(|l| inverse_normal[(k, l)] * shift[l]).sum();
+            out[free[k]] = ls[k] - correction;
         }
-        let r2: Vec<f64> = a.mul_vec(&out).iter().zip(y).map(|(f, y)| f - y).collect();
+        let r2: Vec<f64> = (a * column(&out) - column(y)).iter().copied().collect();
         let same_pattern = (0..y.len()).all(|i| (r2[i].abs() <= delta) == (r[i].abs() <= delta));
         (same_pattern && out.iter().all(|v| *v >= 0.0)).then_some(out)
     }

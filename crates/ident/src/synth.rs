@@ -11,7 +11,7 @@ use std::fmt::Write as _;
 
 use fistage_model::LugreParams;
 
-use crate::complex::Complex;
+use crate::Complex;
 use crate::frf::FrfData;
 use crate::stribeck::StribeckData;
 use crate::units::{Quantity, Unit};
@@ -303,7 +303,7 @@ impl FrfSynth {
                 0.0
             };
             let w = 2.0 * PI * self.f_min_hz * (self.f_max_hz / self.f_min_hz).powf(t);
-            let g = Complex::new(self.sigma0 - self.mass * w * w, w * self.damping).recip();
+            let g = Complex::new(self.sigma0 - self.mass * w * w, w * self.damping).inv();
             let gain = 10f64.powf(self.magnitude_noise_db * rng.normal() / 20.0);
             let turn = (self.phase_noise_deg * rng.normal()).to_radians();
             omega.push(w);
@@ -359,9 +359,9 @@ pub fn frf_csv(data: &FrfData, freq_unit: Unit, layout: FrfCsvLayout) -> String 
                 writeln!(out, "{f},{},{}", u.from_si(g.re), u.from_si(g.im))
             }
             FrfCsvLayout::MagnitudePhase(m, p) => {
-                writeln!(out, "{f},{},{}", m.from_si(g.abs()), p.from_si(g.arg()))
+                writeln!(out, "{f},{},{}", m.from_si(g.norm()), p.from_si(g.arg()))
             }
-            FrfCsvLayout::Magnitude(m) => writeln!(out, "{f},{}", m.from_si(g.abs())),
+            FrfCsvLayout::Magnitude(m) => writeln!(out, "{f},{}", m.from_si(g.norm())),
         };
     }
     out

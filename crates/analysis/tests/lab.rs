@@ -2,7 +2,7 @@
 //! 1-DOF stage of the paper, `robots/stage_1dof_rigid.urdf`, Table 1), the way
 //! the paper's appendix measured the real one: f_ss(v) from the servo force of
 //! constant-velocity runs, the pre-motion FRF from a stepped sine on the
-//! open-loop stage. See [`fistage_ident::lab`].
+//! open-loop stage. See [`fistage_analysis::lab`].
 //!
 //! What remains between the identified and the true parameters, and why:
 //!
@@ -27,7 +27,7 @@
 
 use std::path::{Path, PathBuf};
 
-use fistage_ident::lab::{FrfLab, LabStage, StribeckLab, Tolerance};
+use fistage_analysis::lab::{FrfLab, LabStage, StribeckLab, Tolerance};
 use fistage_ident::{
     Estimate, FrfOptions, IdentError, Sigma2Input, StribeckOptions, fit_frf, fit_stribeck,
 };
@@ -238,7 +238,7 @@ fn frf_bias_is_proportional_to_the_amplitude() {
         tight.measure(&stage).unwrap(),
     );
     for (x, y) in a.runs.iter().zip(&b.runs) {
-        let change = (x.exact_response - y.exact_response).abs() / y.exact_response.abs();
+        let change = (x.exact_response - y.exact_response).norm() / y.exact_response.norm();
         assert!(change < 1e-5, "{} Hz: {change}", x.frequency_hz);
     }
 }

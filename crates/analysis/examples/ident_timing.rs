@@ -2,11 +2,11 @@
 //! (least squares, Huber, L1, asymmetric) and the 100-point Table 1 FRF (known
 //! and fitted mass, complex and magnitude-only); then the simulated lab tests
 //! of the rigid stage (40 constant-velocity runs, a 30-frequency stepped sine).
-//! Run with `cargo run --release -p fistage-ident --example ident_timing`.
+//! Run with `cargo run --release -p fistage-analysis --example ident_timing`.
 
 use std::time::{Duration, Instant};
 
-use fistage_ident::lab::{FrfLab, LabStage, StribeckLab};
+use fistage_analysis::lab::{FrfLab, LabStage, StribeckLab};
 use fistage_ident::synth::{TABLE1_MASS, benchmark_frf_data, benchmark_stribeck_data};
 use fistage_ident::{
     FrfOptions, Loss, StribeckOptions, fit_frf, fit_stribeck, fit_stribeck_asymmetric,

@@ -64,13 +64,13 @@ use std::path::Path;
 use fistage_model::{
     ControllerSettings, Inputs, LugreParams, Model, ReferenceSample, RobotSpec, Scenario, assemble,
 };
-use fistage_sim::{Engine, Excitation, NativeEngine, SimSettings, Trajectory};
+use fistage_sim::{
+    Engine, Excitation, NativeEngine, SignalTable, SimError, SimSettings, Trajectory,
+};
 
-use crate::complex::Complex;
-use crate::error::{IdentError, Result};
-use crate::frf::FrfData;
-use crate::stribeck::StribeckData;
-use crate::synth::Rng;
+use fistage_ident::synth::Rng;
+use fistage_ident::{Complex, FrfData, IdentError, Result, StribeckData};
+use rayon::prelude::*;
 
 /// A stage to measure: a robot file (or a scenario file, for its robot and
 /// overrides) with one friction contact, an actuator and a sensor.
@@ -102,8 +102,10 @@ impl LabStage {
                 .file_name()
                 .map(|n| n.to_string_lossy().into_owned())
                 .unwrap_or_default();
-            let text = format!("robot = {}\nduration = 1.0\n", toml_string(&name));
-            Scenario::from_str(&text, path)?
+            let mut text = toml::Table::new();
+            text.insert("robot".into(), name.into());
+            text.insert("duration".into(), 1.0.into());
+            Scenario::from_str(&text.to_string(), path)?
         };
         let robot = RobotSpec::from_file(&scenario.robot)?;
         let source = path.display().to_string();
@@ -180,13 +182,20 @@ impl LabStage {
         Ok(model)
     }
 
-    fn signal(&self, model: &Model, name: &str) -> Result<usize> {
-        model
-            .signal_index(name)
-            .ok_or_else(|| IdentError::Simulation {
-                file: self.source.clone(),
-                message: format!("the model has no signal '{name}'"),
-            })
+    /// Indices of the actuator force and the sensor position among the model's signals.
+    fn force_and_position(&self, model: &Model) -> Result<[usize; 2]> {
+        let signal = |name: String| {
+            model
+                .signal_index(&name)
+                .ok_or_else(|| IdentError::Simulation {
+                    file: self.source.clone(),
+                    message: format!("the model has no signal '{name}'"),
+                })
+        };
+        Ok([
+            signal(format!("{}.force", self.actuator))?,
+            signal(format!("{}.position", self.sensor))?,
+        ])
     }
 
     fn simulation_error(&self, what: &str, error: impl std::fmt::Display) -> IdentError {
@@ -197,21 +206,6 @@ impl LabStage {
     }
 }
 
-/// A TOML basic string.
-fn toml_string(text: &str) -> String {
-    let mut out = String::from("\"");
-    for ch in text.chars() {
-        match ch {
-            '"' => out.push_str("\\\""),
-            '\\' => out.push_str("\\\\"),
-            c if c.is_control() => out.push_str(&format!("\\u{:04X}", c as u32)),
-            c => out.push(c),
-        }
-    }
-    out.push('"');
-    out
-}
-
 /// Integrates `model` from `x0` over `[0, t_end]`, sampled every `dt`.
 fn simulate(
     model: &Model,
@@ -220,7 +214,7 @@ fn simulate(
     t_end: f64,
     dt: f64,
     tolerance: Tolerance,
-) -> std::result::Result<Trajectory, fistage_sim::SimError> {
+) -> std::result::Result<Trajectory, SimError> {
     let settings = SimSettings {
         t_end,
         sample_interval: dt,
@@ -232,6 +226,30 @@ fn simulate(
     NativeEngine.simulate(model, x0, excitation, &settings, &mut |_| {})
 }
 
+/// One run of a test: `start` drives the model from rest over `settle` (only
+/// the end state is kept), then `measuring`, the same excitation with its clock
+/// continued, over `window` sampled every `dt`. Returns the signals of the
+/// window and the integration steps of the whole run.
+fn settle_and_measure(
+    model: &Model,
+    [start, measuring]: [&dyn Excitation; 2],
+    [settle, window, dt]: [f64; 3],
+    tolerance: Tolerance,
+) -> std::result::Result<(SignalTable, u64), SimError> {
+    let x0 = model.zero_state();
+    let settled = simulate(model, &x0, start, settle, settle, tolerance)?;
+    let measured = simulate(
+        model,
+        settled.last_state(),
+        measuring,
+        window,
+        dt,
+        tolerance,
+    )?;
+    let steps = settled.stats.counts.steps + measured.stats.counts.steps;
+    Ok((measured.signals(model, measuring), steps))
+}
+
 /// Integration tolerances of the simulated runs.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Tolerance {
@@ -240,36 +258,6 @@ pub struct Tolerance {
     /// Absolute tolerances are `rtol * atol_scale` times each state's nominal
     /// size (1 mm, 10 mm/s, and the presliding distance for a bristle).
     pub atol_scale: f64,
-}
-
-/// Runs `job(i)` for `i in 0..n` on the available cores, results in order.
-fn parallel<T: Send>(n: usize, job: impl Fn(usize) -> T + Sync) -> Vec<T> {
-    let workers = std::thread::available_parallelism()
-        .map_or(1, |c| c.get())
-        .min(n.max(1));
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let mut results: Vec<(usize, T)> = std::thread::scope(|scope| {
-        let handles: Vec<_> = (0..workers)
-            .map(|_| {
-                scope.spawn(|| {
-                    let mut done = Vec::new();
-                    loop {
-                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                        if i >= n {
-                            break done;
-                        }
-                        done.push((i, job(i)));
-                    }
-                })
-            })
-            .collect();
-        handles
-            .into_iter()
-            .flat_map(|h| h.join().expect("a lab run panicked"))
-            .collect()
-    });
-    results.sort_by_key(|(i, _)| *i);
-    results.into_iter().map(|(_, r)| r).collect()
 }
 
 /// `n` values from `lo` to `hi`, equally spaced on a logarithmic scale (at least 2).
@@ -293,6 +281,21 @@ fn quantise(x: f64, resolution: f64) -> f64 {
 fn run_seed(seed: u64, i: usize) -> u64 {
     seed.wrapping_mul(0x9e37_79b9_7f4a_7c15)
         .wrapping_add(i as u64 + 1)
+}
+
+/// Runs `run(i, seed of run i)` for `i in 0..n` on rayon's threads; the
+/// results in order, or the first error in that order (every run finishes,
+/// so which error is reported does not depend on the scheduling).
+fn runs<T: Send>(
+    n: usize,
+    seed: u64,
+    run: impl Fn(usize, u64) -> Result<T> + Sync,
+) -> Result<Vec<T>> {
+    let results: Vec<Result<T>> = (0..n)
+        .into_par_iter()
+        .map(|i| run(i, run_seed(seed, i)))
+        .collect();
+    results.into_iter().collect()
 }
 
 /// The servo reference of a constant-velocity run: from rest at 0, constant
@@ -441,20 +444,12 @@ impl StribeckLab {
             k_i: 0.0,
         };
         let model = stage.model(Some(servo))?;
-        let force = stage.signal(&model, &format!("{}.force", stage.actuator))?;
-        let position = stage.signal(&model, &format!("{}.position", stage.sensor))?;
+        let signals = stage.force_and_position(&model)?;
         let mut velocities: Vec<f64> = self.speeds.iter().rev().map(|s| -s).collect();
         velocities.extend(self.speeds.iter().copied());
-        let runs = parallel(velocities.len(), |i| {
-            self.run(
-                stage,
-                &model,
-                velocities[i],
-                [force, position],
-                run_seed(self.seed, i),
-            )
-        });
-        let runs: Vec<StribeckRun> = runs.into_iter().collect::<Result<_>>()?;
+        let runs = runs(velocities.len(), self.seed, |i, seed| {
+            self.run(stage, &model, velocities[i], signals, seed)
+        })?;
         if let Some(run) = runs.iter().find(|r| {
             !(r.drift.abs() <= self.steady_tolerance && r.ripple <= self.steady_tolerance)
         }) {
@@ -489,30 +484,19 @@ impl StribeckLab {
         let speed = velocity.abs();
         let settle = self.accel_time + self.servo_settle.max(self.settle_travel / speed);
         let window = self.window_time.max(self.window_travel / speed);
-        let failed = |e| stage.simulation_error(&format!("f_ss run at {velocity} m/s"), e);
         let ramp = Ramp {
             velocity,
             accel_time: self.accel_time,
             offset: 0.0,
         };
-        let x0 = model.zero_state();
-        let settled =
-            simulate(model, &x0, &ramp, settle, settle, self.tolerance).map_err(failed)?;
         let measuring = Ramp {
             offset: settle,
             ..ramp
         };
-        let dt = 1.0 / self.sample_rate;
-        let trajectory = simulate(
-            model,
-            settled.last_state(),
-            &measuring,
-            window,
-            dt,
-            self.tolerance,
-        )
-        .map_err(failed)?;
-        let signals = trajectory.signals(model, &measuring);
+        let times = [settle, window, 1.0 / self.sample_rate];
+        let (signals, steps) =
+            settle_and_measure(model, [&ramp, &measuring], times, self.tolerance)
+                .map_err(|e| stage.simulation_error(&format!("f_ss run at {velocity} m/s"), e))?;
         let f = &signals.columns[force];
         let x = &signals.columns[position];
         let t = &signals.times;
@@ -540,7 +524,7 @@ impl StribeckLab {
             ripple,
             settle_time: settle,
             window,
-            steps: settled.stats.counts.steps + trajectory.stats.counts.steps,
+            steps,
         })
     }
 }
@@ -644,18 +628,10 @@ impl FrfLab {
     /// Runs the test: one stepped-sine run per frequency.
     pub fn measure(&self, stage: &LabStage) -> Result<FrfMeasurement> {
         let model = stage.model(None)?;
-        let force = stage.signal(&model, &format!("{}.force", stage.actuator))?;
-        let position = stage.signal(&model, &format!("{}.position", stage.sensor))?;
-        let runs = parallel(self.frequencies_hz.len(), |i| {
-            self.run(
-                stage,
-                &model,
-                self.frequencies_hz[i],
-                [force, position],
-                run_seed(self.seed, i),
-            )
-        });
-        let runs: Vec<FrfRun> = runs.into_iter().collect::<Result<_>>()?;
+        let signals = stage.force_and_position(&model)?;
+        let runs = runs(self.frequencies_hz.len(), self.seed, |i, seed| {
+            self.run(stage, &model, self.frequencies_hz[i], signals, seed)
+        })?;
         let data = FrfData::new_complex(
             format!("{} (simulated FRF test)", stage.source),
             runs.iter().map(|r| 2.0 * PI * r.frequency_hz).collect(),
@@ -677,31 +653,21 @@ impl FrfLab {
         let settle = whole(self.settle_time, self.settle_periods) as f64 * period;
         let periods = whole(self.measure_time, self.measure_periods);
         let per_period = self.samples_per_period.max(4);
-        let failed = |e| stage.simulation_error(&format!("FRF run at {frequency_hz} Hz"), e);
         let drive = SineForce {
             amplitude: self.force_amplitude,
             omega: 2.0 * PI * frequency_hz,
             offset: 0.0,
         };
-        let x0 = model.zero_state();
-        let settled =
-            simulate(model, &x0, &drive, settle, settle, self.tolerance).map_err(failed)?;
         let measuring = SineForce {
             offset: settle,
             ..drive
         };
         let n = periods * per_period;
         let dt = period / per_period as f64;
-        let trajectory = simulate(
-            model,
-            settled.last_state(),
-            &measuring,
-            n as f64 * dt,
-            dt,
-            self.tolerance,
-        )
-        .map_err(failed)?;
-        let signals = trajectory.signals(model, &measuring);
+        let times = [settle, n as f64 * dt, dt];
+        let (signals, steps) =
+            settle_and_measure(model, [&drive, &measuring], times, self.tolerance)
+                .map_err(|e| stage.simulation_error(&format!("FRF run at {frequency_hz} Hz"), e))?;
         let mut rng = Rng::new(seed);
         let x: Vec<f64> = signals.columns[position][..n]
             .iter()
@@ -713,7 +679,7 @@ impl FrfLab {
             let mut sum = Complex::new(0.0, 0.0);
             for (k, value) in values.iter().enumerate() {
                 let phase = -2.0 * PI * (k % per_period) as f64 / per_period as f64;
-                sum = sum + Complex::from_polar(*value, phase);
+                sum += Complex::from_polar(*value, phase);
             }
             sum.scale(2.0 / n as f64)
         };
@@ -725,7 +691,7 @@ impl FrfLab {
             peak_bristle: peak_ratio(&signals.columns, stage, model, n),
             settle_time: settle,
             periods,
-            steps: settled.stats.counts.steps + trajectory.stats.counts.steps,
+            steps,
         })
     }
 }
