@@ -129,7 +129,7 @@ pub fn modal_analysis(
     let state = model.equilibrium(kind, &inputs, start)?;
     let (jacobian, tangent) = model.tangent_jacobian(&state, &inputs);
     let np = tangent.n_positions;
-    let mass = fistage_model::dynamics::mass_matrix(model, &state);
+    let mass = model.mass_matrix(&state);
     let coordinates = coordinate_names(model);
     let nominal: Vec<f64> = tangent
         .names

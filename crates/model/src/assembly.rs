@@ -9,12 +9,13 @@ use std::path::Path;
 use nalgebra::{Isometry3, Matrix3, Vector3};
 
 use crate::dynamics;
+use crate::elements::{
+    Body, Controller, Frame, FrictionContact, Isolator, Joint, JointMotion, MassBlock, PointAxis,
+    SignalInfo, StateKind, StateLayout, Structure,
+};
 use crate::error::LoadError;
 use crate::evaluator::Evaluator;
-use crate::model::{
-    Body, Controller, Frame, FrictionContact, Isolator, Joint, JointMotion, MassBlock, Model,
-    PointAxis, SignalInfo, StateKind, StateLayout,
-};
+use crate::model::Model;
 use crate::parameter;
 use crate::robot::{JointKind, PointAxisSpec, RobotSpec};
 use crate::scenario::Scenario;
@@ -520,8 +521,7 @@ impl<'a> Assembler<'a> {
             nv,
             nz,
         };
-        let mut model = Model {
-            name: robot.name.clone(),
+        let mut structure = Structure {
             bodies: self.bodies,
             isolators,
             frictions,
@@ -531,13 +531,16 @@ impl<'a> Assembler<'a> {
             gravity: Vector3::from(scenario.gravity),
             signals: Vec::new(),
             layout,
-            evaluator: Evaluator::General,
             mass_blocks: Vec::new(),
-            robot: robot.clone(),
         };
-        model.signals = signal_list(&model);
-        check_mass_matrix(&mut model, &robot.file)?;
-        Ok(model)
+        structure.signals = signal_list(&structure);
+        let evaluator = check_mass_matrix(&mut structure, &robot.file)?;
+        Ok(Model {
+            name: robot.name.clone(),
+            structure,
+            evaluator,
+            robot: robot.clone(),
+        })
     }
 }
 
@@ -558,7 +561,7 @@ fn frame_pose_at_zero(bodies: &[Body], frame: Frame) -> Isometry3<f64> {
 }
 
 /// Every output signal the model can write, in a fixed order.
-fn signal_list(model: &Model) -> Vec<SignalInfo> {
+fn signal_list(model: &Structure) -> Vec<SignalInfo> {
     let mut signals = Vec::new();
     let mut push = |name: String, unit: &'static str| signals.push(SignalInfo { name, unit });
     for sensor in &model.sensors {
@@ -617,7 +620,7 @@ fn signal_list(model: &Model) -> Vec<SignalInfo> {
 
 /// Groups bodies by the subtree they hang in, numbers each block's dofs, and
 /// inverts the blocks that never change.
-fn mass_blocks(model: &mut Model, mass: &nalgebra::DMatrix<f64>) -> Vec<MassBlock> {
+fn mass_blocks(model: &mut Structure, mass: &nalgebra::DMatrix<f64>) -> Vec<MassBlock> {
     let mut blocks: Vec<MassBlock> = Vec::new();
     for index in 0..model.bodies.len() {
         let block = match model.bodies[index].parent {
@@ -646,7 +649,7 @@ fn mass_blocks(model: &mut Model, mass: &nalgebra::DMatrix<f64>) -> Vec<MassBloc
         {
             let b = &model.bodies[body];
             block.free_body = b.inertia.try_inverse().map(|inverse_inertia| {
-                let mass_properties = crate::laws::RigidBody {
+                let mass_properties = crate::elements::RigidBody {
                     inverse_mass: 1.0 / b.mass,
                     com: b.com,
                     inertia: b.inertia,
@@ -681,7 +684,7 @@ fn mass_blocks(model: &mut Model, mass: &nalgebra::DMatrix<f64>) -> Vec<MassBloc
 /// The mass matrix must be positive definite at the zero configuration (every
 /// degree of freedom carries mass or inertia); then the model's evaluator is
 /// chosen ([`Evaluator::choose`], the one place that decides it).
-fn check_mass_matrix(model: &mut Model, file: &Path) -> Result<(), LoadError> {
+fn check_mass_matrix(model: &mut Structure, file: &Path) -> Result<Evaluator, LoadError> {
     let x = model.zero_state();
     let mass = dynamics::mass_matrix(model, &x);
     let Some(factor) = mass.clone().cholesky() else {
@@ -701,6 +704,5 @@ fn check_mass_matrix(model: &mut Model, file: &Path) -> Result<(), LoadError> {
         ));
     };
     model.mass_blocks = mass_blocks(model, &mass);
-    model.evaluator = Evaluator::choose(model, &factor.inverse());
-    Ok(())
+    Ok(Evaluator::choose(model, &factor.inverse()))
 }

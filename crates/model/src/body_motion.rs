@@ -4,57 +4,17 @@
 //! wrenches the force elements (isolators, LuGre contacts, servo) apply to each
 //! body, computed by the same code the native right-hand side uses.
 
-use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
+use nalgebra::{Rotation3, UnitQuaternion};
 
 use crate::dynamics::Workspace;
-use crate::model::{Inputs, JointMotion, Model};
-
-/// World motion of one body frame.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct BodyMotion {
-    /// Orientation of the body frame in the world.
-    pub rotation: Matrix3<f64>,
-    /// Position of the body-frame origin, m.
-    pub origin: Vector3<f64>,
-    /// Angular velocity, world frame, rad/s.
-    pub omega: Vector3<f64>,
-    /// Velocity of the body-frame origin, world frame, m/s.
-    pub velocity: Vector3<f64>,
-}
-
-impl BodyMotion {
-    /// At rest at the world origin.
-    pub fn identity() -> Self {
-        Self {
-            rotation: Matrix3::identity(),
-            origin: Vector3::zeros(),
-            omega: Vector3::zeros(),
-            velocity: Vector3::zeros(),
-        }
-    }
-}
-
-/// A force and the moment it carries about the world origin (not gravity).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct BodyWrench {
-    /// Force, world frame, N.
-    pub force: Vector3<f64>,
-    /// Moment about the world origin, world frame, N m.
-    pub moment: Vector3<f64>,
-}
-
-impl BodyWrench {
-    /// The moment about a point `center` (e.g. the body's centre of mass).
-    pub fn moment_about(&self, center: &Vector3<f64>) -> Vector3<f64> {
-        self.moment - center.cross(&self.force)
-    }
-}
+use crate::elements::{BodyMotion, BodyWrench, Inputs, JointMotion};
+use crate::model::Model;
 
 impl Model {
     /// World motion of every body at state x, in body order.
     pub fn body_motions(&self, x: &[f64], ws: &mut Workspace) -> Vec<BodyMotion> {
         self.evaluate(x, &Inputs::default(), ws);
-        (0..self.bodies.len())
+        (0..self.structure.bodies.len())
             .map(|i| BodyMotion {
                 rotation: ws.rotation_of(i),
                 origin: ws.origin_of(i),
@@ -70,9 +30,9 @@ impl Model {
     /// kept, and revolute angles stay nearest the previous angle, so the
     /// coordinates are continuous along a trajectory.
     pub fn set_joint_state(&self, motions: &[BodyMotion], x: &mut [f64]) {
-        let nq = self.layout.nq;
+        let nq = self.structure.layout.nq;
         let rest = BodyMotion::identity();
-        for (i, body) in self.bodies.iter().enumerate() {
+        for (i, body) in self.structure.bodies.iter().enumerate() {
             let parent = body.parent.map_or(&rest, |p| &motions[p]);
             let motion = &motions[i];
             let joint = &body.joint;
@@ -143,12 +103,18 @@ impl Model {
     /// of (state index, rate).
     pub fn internal_rates(&self, ws: &Workspace) -> Vec<(usize, f64)> {
         let mut rates: Vec<(usize, f64)> = self
+            .structure
             .frictions
             .iter()
             .zip(&ws.elements.z_rate)
             .map(|(friction, rate)| (friction.z_index, *rate))
             .collect();
-        if let Some(index) = self.controller.as_ref().and_then(|c| c.integral_index) {
+        if let Some(index) = self
+            .structure
+            .controller
+            .as_ref()
+            .and_then(|c| c.integral_index)
+        {
             rates.push((index, ws.elements.tracking_error));
         }
         rates
@@ -159,6 +125,7 @@ impl Model {
 mod tests {
     use super::*;
     use crate::assembly::load;
+    use nalgebra::Vector3;
     use std::path::Path;
 
     fn loaded(scenario: &str) -> crate::Loaded {
@@ -171,7 +138,7 @@ mod tests {
         let mut x: Vec<f64> = (0..model.n_states())
             .map(|i| 1e-3 * ((i as f64) * 1.7).sin())
             .collect();
-        for body in &model.bodies {
+        for body in &model.structure.bodies {
             if let JointMotion::Floating = body.joint.motion {
                 let q0 = body.joint.q_offset + 3;
                 let q = UnitQuaternion::from_euler_angles(0.02, -0.03, 0.4);
@@ -192,10 +159,10 @@ mod tests {
             let mut ws = model.workspace();
             let motions = model.body_motions(&x, &mut ws);
             let mut back = x.clone();
-            let n = model.layout.nq + model.layout.nv;
+            let n = model.structure.layout.nq + model.structure.layout.nv;
             back[..n].iter_mut().for_each(|v| *v = 0.0);
             // Keep the quaternion hemisphere hint of the original state.
-            for body in &model.bodies {
+            for body in &model.structure.bodies {
                 if let JointMotion::Floating = body.joint.motion {
                     let q0 = body.joint.q_offset + 3;
                     back[q0] = 1.0;
@@ -206,7 +173,7 @@ mod tests {
                 assert!(
                     (a - b).abs() < 1e-14,
                     "{scenario}: {} {a} vs {b}",
-                    model.layout.names[i]
+                    model.structure.layout.names[i]
                 );
             }
         }
@@ -230,17 +197,18 @@ mod tests {
                 force: Vector3::zeros(),
                 moment: Vector3::zeros(),
             };
-            model.bodies.len()
+            model.structure.bodies.len()
         ];
         model.element_wrenches(&x, &inputs, &mut ws, &mut wrenches);
         let mut dx = vec![0.0; model.n_states()];
         model.rhs(&x, &inputs, &mut dx, &mut model.workspace());
-        let nq = model.layout.nq;
-        for (i, body) in model.bodies.iter().enumerate() {
+        let nq = model.structure.layout.nq;
+        for (i, body) in model.structure.bodies.iter().enumerate() {
             if let JointMotion::Prismatic { axis } = body.joint.motion {
                 // One prismatic body per joint to the world: m a = F . axis + m g . axis.
                 let acceleration = dx[nq + body.joint.v_offset];
-                let force = wrenches[i].force.dot(&axis) + body.mass * model.gravity.dot(&axis);
+                let force =
+                    wrenches[i].force.dot(&axis) + body.mass * model.structure.gravity.dot(&axis);
                 assert!(
                     (body.mass * acceleration - force).abs() < 1e-9 * force.abs().max(1.0),
                     "{}: m a = {} vs F = {force}",

@@ -17,43 +17,18 @@
 
 use nalgebra::{DMatrix, DVector, Matrix3, Quaternion, Rotation3, Unit, UnitQuaternion, Vector3};
 
-use crate::evaluator::Evaluator;
+use crate::elements::{Body, BodyWrench, Frame, Inputs, JointMotion, RigidBody, Structure};
 use crate::laws::{
-    RigidBody, bushing_wrench, cast3, cast33, newton_euler, quaternion_rate, quaternion_rotation,
+    bushing_wrench, cast3, cast33, newton_euler, quaternion_rate, quaternion_rotation,
     relative_rotation, servo_forces,
 };
-use crate::model::{Body, Frame, Inputs, JointMotion, Model};
 use crate::reference::ReferenceSample;
 use crate::rooted::RootedScratch;
 use crate::scalar::Scalar;
+pub use crate::values::{ElementValues, InputValues};
 
-/// Model inputs in any scalar type (see [`Inputs`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct InputValues<S> {
-    /// Reference position, m.
-    pub reference_position: S,
-    /// Reference velocity, m/s.
-    pub reference_velocity: S,
-    /// External servo force, N.
-    pub servo_force: S,
-    /// Counter-surface velocity, m/s.
-    pub platform_velocity: S,
-}
-
-impl Inputs {
-    /// The inputs as constants of scalar type S.
-    pub fn values<S: Scalar>(&self) -> InputValues<S> {
-        InputValues {
-            reference_position: S::constant(self.reference.position),
-            reference_velocity: S::constant(self.reference.velocity),
-            servo_force: S::constant(self.servo_force),
-            platform_velocity: S::constant(self.platform_velocity),
-        }
-    }
-}
-
-/// How [`Model::rhs`] evaluates a model; every path gives the same state
-/// derivative as [`Model::rhs_general`] up to round-off.
+/// How [`crate::Model::rhs`] evaluates a model; every path gives the same state
+/// derivative as [`crate::Model::rhs_general`] up to round-off.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum EvaluationPath {
     /// No joint rotates a body: kinematics are linear in the coordinates, so
@@ -91,47 +66,15 @@ pub struct Workspace<S: Scalar = f64> {
     pub(crate) generalized: Vec<S>,
     /// Scratch space of the rooted fast path ([`crate::rooted`]).
     pub(crate) rooted: crate::rooted::RootedScratch<S>,
-    /// Per-element results of the last [`Model::evaluate`] or [`Model::outputs`]
-    /// (the fast paths of [`Model::rhs`] fill only the sensor, actuator and
+    /// Per-element results of the last [`crate::Model::evaluate`] or [`crate::Model::outputs`]
+    /// (the fast paths of [`crate::Model::rhs`] fill only the sensor, actuator and
     /// tracking-error entries).
     pub elements: ElementValues<S>,
 }
 
-/// Values of the force elements at the last evaluated state.
-#[derive(Debug, Clone, Default)]
-pub struct ElementValues<S = f64> {
-    /// LuGre friction force per contact (positive opposes positive sliding), N.
-    pub friction_force: Vec<S>,
-    /// Sliding velocity per contact, m/s.
-    pub slip_velocity: Vec<S>,
-    /// Bristle rate z' per contact, m/s.
-    pub z_rate: Vec<S>,
-    /// Displacement of each contact point along its axis from the zero configuration, m.
-    pub contact_displacement: Vec<S>,
-    /// Force per actuator, N.
-    pub actuator_force: Vec<S>,
-    /// Reading per sensor, m.
-    pub sensor_position: Vec<S>,
-    /// Rate per sensor, m/s.
-    pub sensor_velocity: Vec<S>,
-    /// Deflection per isolator: translation (m) then rotation vector (rad), attach axes.
-    pub isolator_deflection: Vec<[S; 6]>,
-    /// Deflection rate per isolator.
-    pub isolator_rate: Vec<[S; 6]>,
-    /// Reference used by the controller.
-    pub reference: ReferenceSample,
-    /// Tracking error x - x_r of the controller, m.
-    pub tracking_error: S,
-}
-
-impl Model {
-    /// A workspace sized for this model, for `f64` evaluation.
-    pub fn workspace(&self) -> Workspace<f64> {
-        self.workspace_of()
-    }
-
-    /// A workspace sized for this model, for any scalar type.
-    pub fn workspace_of<S: Scalar>(&self) -> Workspace<S> {
+impl Structure {
+    /// A workspace sized for this structure, with the fast path's scratch space.
+    pub(crate) fn workspace_with<S: Scalar>(&self, rooted: RootedScratch<S>) -> Workspace<S> {
         let nb = self.bodies.len();
         let nv = self.layout.nv;
         let zeros = || vec![Vector3::zeros(); nb];
@@ -175,10 +118,7 @@ impl Model {
                 .map(|b| vec![S::zero(); b.dofs.len()])
                 .collect(),
             generalized: vec![S::zero(); nv],
-            rooted: match &self.evaluator {
-                Evaluator::RootedBodies(plan) => plan.scratch(),
-                _ => RootedScratch::empty(),
-            },
+            rooted,
             elements: ElementValues {
                 friction_force: vec![S::zero(); nf],
                 slip_velocity: vec![S::zero(); nf],
@@ -209,34 +149,8 @@ impl Model {
         parallel
     }
 
-    /// Which evaluation [`Model::rhs`] takes for this model.
-    pub fn evaluation_path(&self) -> EvaluationPath {
-        self.evaluator.path()
-    }
-
-    /// State derivative `dx = f(x, u)`. `x` and `dx` have [`Model::n_states`] entries.
-    /// The evaluation depends on the structure (see [`EvaluationPath`]);
-    /// [`Model::rhs_general`] is the general path every model can take.
-    #[inline]
-    pub fn rhs(&self, x: &[f64], inputs: &Inputs, dx: &mut [f64], ws: &mut Workspace) {
-        self.evaluator.rhs(self, x, &inputs.values(), dx, ws);
-    }
-
-    /// [`Model::rhs`] in any scalar type: the evaluation simulation uses,
-    /// differentiated exactly with dual numbers.
-    #[inline]
-    pub fn rhs_of<S: Scalar>(
-        &self,
-        x: &[S],
-        inputs: &InputValues<S>,
-        dx: &mut [S],
-        ws: &mut Workspace<S>,
-    ) {
-        self.evaluator.rhs(self, x, inputs, dx, ws);
-    }
-
     /// State derivative by the general recursive dynamics, for any model and scalar.
-    pub fn rhs_general<S: Scalar>(
+    pub(crate) fn rhs_general<S: Scalar>(
         &self,
         x: &[S],
         inputs: &InputValues<S>,
@@ -258,12 +172,17 @@ impl Model {
     }
 
     /// Kinematics and force elements at state x; results stay in `ws`.
-    pub fn evaluate(&self, x: &[f64], inputs: &Inputs, ws: &mut Workspace) {
+    pub(crate) fn evaluate(&self, x: &[f64], inputs: &Inputs, ws: &mut Workspace) {
         ws.elements.reference = inputs.reference;
         self.evaluate_values(x, &inputs.values(), ws);
     }
 
-    fn evaluate_values<S: Scalar>(&self, x: &[S], inputs: &InputValues<S>, ws: &mut Workspace<S>) {
+    pub(crate) fn evaluate_values<S: Scalar>(
+        &self,
+        x: &[S],
+        inputs: &InputValues<S>,
+        ws: &mut Workspace<S>,
+    ) {
         self.kinematics(x, ws);
         ws.force.fill(Vector3::zeros());
         ws.moment.fill(Vector3::zeros());
@@ -272,15 +191,15 @@ impl Model {
         self.sensors_and_servo(x, inputs, ws);
     }
 
-    /// Writes every output signal (see [`Model::signals`]) at state x.
-    pub fn outputs(&self, x: &[f64], inputs: &Inputs, out: &mut [f64], ws: &mut Workspace) {
+    /// Writes every output signal (see [`crate::Model::signals`]) at state x.
+    pub(crate) fn outputs(&self, x: &[f64], inputs: &Inputs, out: &mut [f64], ws: &mut Workspace) {
         ws.elements.reference = inputs.reference;
         self.outputs_of(x, &inputs.values(), out, ws);
     }
 
-    /// [`Model::outputs`] in any scalar type: with dual numbers it gives exact
+    /// [`crate::Model::outputs`] in any scalar type: with dual numbers it gives exact
     /// derivatives of the outputs (e.g. their direct dependence on the inputs).
-    pub fn outputs_of<S: Scalar>(
+    pub(crate) fn outputs_of<S: Scalar>(
         &self,
         x: &[S],
         inputs: &InputValues<S>,
@@ -334,7 +253,7 @@ impl Model {
     /// Kinetic energy + isolator springs + bristle springs sigma0 z^2 / 2 +
     /// gravitational potential (relative to the world origin), J. With no servo
     /// and no platform motion this never increases.
-    pub fn stored_energy(&self, x: &[f64], ws: &mut Workspace) -> f64 {
+    pub(crate) fn stored_energy(&self, x: &[f64], ws: &mut Workspace) -> f64 {
         self.evaluate(x, &Inputs::default(), ws);
         let mut energy = 0.0;
         for (i, body) in self.bodies.iter().enumerate() {
@@ -668,7 +587,7 @@ impl Model {
 /// about the body origin, and Newton-Euler without velocity terms (those are
 /// in the generalized forces already) gives the accelerations.
 fn free_body_accelerations<S: Scalar>(
-    model: &Model,
+    model: &Structure,
     index: usize,
     mass_properties: &RigidBody,
     ws: &mut Workspace<S>,
@@ -740,18 +659,6 @@ pub fn quaternion_at<S: Scalar>(x: &[S], start: usize) -> UnitQuaternion<S> {
     ))
 }
 
-impl Model {
-    /// The actuator that receives the external `servo_force` input: the
-    /// controller's, or the first actuator when there is no controller.
-    #[inline]
-    pub(crate) fn servo_actuator(&self) -> Option<usize> {
-        match &self.controller {
-            Some(controller) => Some(controller.actuator),
-            None => (!self.actuators.is_empty()).then_some(0),
-        }
-    }
-}
-
 fn apply_wrench<S: Scalar>(
     ws: &mut Workspace<S>,
     frame: Frame,
@@ -765,10 +672,10 @@ fn apply_wrench<S: Scalar>(
     }
 }
 
-impl Model {
+impl Structure {
     /// World pose (rotation, origin) of every body at state x.
-    pub fn body_poses(&self, x: &[f64]) -> Vec<(Matrix3<f64>, Vector3<f64>)> {
-        let mut ws = self.workspace();
+    pub(crate) fn body_poses(&self, x: &[f64]) -> Vec<(Matrix3<f64>, Vector3<f64>)> {
+        let mut ws = self.workspace_with(RootedScratch::empty());
         self.kinematics(x, &mut ws);
         ws.rotation
             .iter()
@@ -800,14 +707,14 @@ impl Workspace<f64> {
     }
 
     /// The element wrench on body i after an evaluation (before gravity and inertia).
-    pub(crate) fn wrench_of(&self, i: usize) -> crate::body_motion::BodyWrench {
-        crate::body_motion::BodyWrench {
+    pub(crate) fn wrench_of(&self, i: usize) -> BodyWrench {
+        BodyWrench {
             force: self.force[i],
             moment: self.moment[i],
         }
     }
 
-    /// World velocity of a point (body frame coordinates) after [`Model::evaluate`].
+    /// World velocity of a point (body frame coordinates) after [`crate::Model::evaluate`].
     pub(crate) fn point_velocity(&self, body: usize, point: &Vector3<f64>) -> Vector3<f64> {
         self.velocity[body] + self.omega[body].cross(&(self.rotation[body] * point))
     }
@@ -840,8 +747,8 @@ fn ws_kinematics<'a, S: Scalar>(
 
 /// One diagonal block of the mass matrix (row-major, block-local indices).
 fn fill_block_mass<S: Scalar>(
-    model: &Model,
-    block: &crate::model::MassBlock,
+    model: &Structure,
+    block: &crate::elements::MassBlock,
     out: &mut [S],
     kin: Kinematics<S>,
 ) {
@@ -859,7 +766,7 @@ fn fill_block_mass<S: Scalar>(
 /// Jacobians, row-major `k x k`; `local` numbers each body's chain of dofs
 /// in it.
 fn fill_mass<S: Scalar>(
-    model: &Model,
+    model: &Structure,
     bodies: &[usize],
     k: usize,
     local: impl Fn(&Body) -> &[usize],
@@ -957,8 +864,8 @@ fn cholesky_solve<S: Scalar>(a: &mut [S], b: &mut [S]) -> bool {
 }
 
 /// The joint-space mass matrix at state x (positions are read from x).
-pub fn mass_matrix(model: &Model, x: &[f64]) -> DMatrix<f64> {
-    let mut ws = model.workspace();
+pub(crate) fn mass_matrix(model: &Structure, x: &[f64]) -> DMatrix<f64> {
+    let mut ws = model.workspace_with(RootedScratch::empty());
     model.kinematics(x, &mut ws);
     let nv = model.layout.nv;
     let bodies: Vec<usize> = (0..model.bodies.len()).collect();

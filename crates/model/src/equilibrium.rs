@@ -14,7 +14,8 @@
 use nalgebra::{DMatrix, DVector};
 use thiserror::Error;
 
-use crate::model::{Inputs, Model};
+use crate::elements::Inputs;
+use crate::model::Model;
 
 /// Which equilibrium.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -66,13 +67,18 @@ impl Model {
         if kind == EquilibriumKind::Sticking {
             inputs.platform_velocity = 0.0;
         }
-        let nq = self.layout.nq;
-        let nv = self.layout.nv;
+        let nq = self.structure.layout.nq;
+        let nv = self.structure.layout.nv;
         let mut x = start.to_vec();
         x[nq..nq + nv].fill(0.0);
-        let z_start: Vec<f64> = self.frictions.iter().map(|f| x[f.z_index]).collect();
+        let z_start: Vec<f64> = self
+            .structure
+            .frictions
+            .iter()
+            .map(|f| x[f.z_index])
+            .collect();
         if kind == EquilibriumKind::Slipping {
-            for friction in &self.frictions {
+            for friction in &self.structure.frictions {
                 x[friction.z_index] = friction.lugre.steady_state_z(-inputs.platform_velocity);
             }
         }
@@ -97,8 +103,9 @@ impl Model {
             let mut residual = DVector::zeros(unknowns.len());
             for (row, equation) in (np..n).enumerate() {
                 let sticking_contact = if kind == EquilibriumKind::Sticking {
-                    self.frictions.iter().position(|fr| {
-                        tangent_index(&tangent, &self.layout.names[fr.z_index]) == Some(equation)
+                    self.structure.frictions.iter().position(|fr| {
+                        tangent_index(&tangent, &self.structure.layout.names[fr.z_index])
+                            == Some(equation)
                     })
                 } else {
                     None
@@ -106,7 +113,7 @@ impl Model {
                 match sticking_contact {
                     Some(k) => {
                         // z - z_0 - s(q) = 0; ds/dq equals d(slip)/dv, which is dz'/dv here.
-                        residual[row] = x[self.frictions[k].z_index]
+                        residual[row] = x[self.structure.frictions[k].z_index]
                             - z_start[k]
                             - ws.elements.contact_displacement[k];
                         for (col, &unknown) in unknowns.iter().enumerate() {
@@ -158,7 +165,8 @@ fn tangent_index(tangent: &crate::linearize::Tangent, name: &str) -> Option<usiz
 /// Typical size of a tangent coordinate, for the convergence test.
 fn tangent_nominal(model: &Model, tangent: &crate::linearize::Tangent, index: usize) -> f64 {
     model
+        .structure
         .layout
         .index(&tangent.names[index])
-        .map_or(1e-3, |i| model.layout.nominal[i])
+        .map_or(1e-3, |i| model.structure.layout.nominal[i])
 }

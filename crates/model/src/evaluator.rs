@@ -10,8 +10,8 @@
 use nalgebra::DMatrix;
 
 use crate::dynamics::{EvaluationPath, InputValues, Workspace};
-use crate::model::Model;
-use crate::rooted::RootedPlan;
+use crate::elements::Structure;
+use crate::rooted::{RootedPlan, RootedScratch};
 use crate::scalar::Scalar;
 use crate::translational::TranslationalMap;
 
@@ -29,7 +29,7 @@ pub(crate) enum Evaluator {
 impl Evaluator {
     /// The cheapest exact evaluation for the model's structure, given the
     /// inverse of its mass matrix at the zero configuration.
-    pub(crate) fn choose(model: &Model, mass_inverse: &DMatrix<f64>) -> Self {
+    pub(crate) fn choose(model: &Structure, mass_inverse: &DMatrix<f64>) -> Self {
         if model.bodies.iter().all(|b| !b.joint.motion.rotates()) {
             return Self::ConstantJacobian(TranslationalMap::build(model, mass_inverse));
         }
@@ -48,19 +48,29 @@ impl Evaluator {
         }
     }
 
+    /// The scratch space its evaluation needs in a workspace.
+    pub(crate) fn scratch<S: Scalar>(&self) -> RootedScratch<S> {
+        match self {
+            Self::RootedBodies(plan) => plan.scratch(),
+            _ => RootedScratch::empty(),
+        }
+    }
+
     /// The state derivative, in any scalar type.
     #[inline]
     pub(crate) fn rhs<S: Scalar>(
         &self,
-        model: &Model,
+        model: &Structure,
         x: &[S],
         inputs: &InputValues<S>,
         dx: &mut [S],
         ws: &mut Workspace<S>,
     ) {
         match self {
-            Self::ConstantJacobian(map) => map.rhs(model, x, inputs, dx, ws),
-            Self::RootedBodies(plan) => plan.rhs(model, x, inputs, dx, ws),
+            Self::ConstantJacobian(map) => map.rhs(model, x, inputs, dx, &mut ws.generalized),
+            Self::RootedBodies(plan) => {
+                plan.rhs(model, x, inputs, dx, &mut ws.rooted, &mut ws.elements)
+            }
             Self::General => model.rhs_general(x, inputs, dx, ws),
         }
     }
@@ -106,8 +116,8 @@ mod tests {
                     assert!(
                         (chosen[(row, col)] - dx[row].eps).abs() <= 1e-9 * scale,
                         "{scenario}: d{}/d{}: {} vs {}",
-                        model.layout.names[row],
-                        model.layout.names[col],
+                        model.layout().names[row],
+                        model.layout().names[col],
                         chosen[(row, col)],
                         dx[row].eps
                     );

@@ -12,9 +12,9 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::dynamics::{ElementValues, InputValues};
-use crate::model::{Controller, Model};
+use crate::elements::{Controller, RigidBody, Structure};
 use crate::scalar::Scalar;
+use crate::values::{ElementValues, InputValues};
 
 /// A constant vector in scalar type S.
 #[inline(always)]
@@ -172,7 +172,7 @@ impl Controller {
 /// controller).
 #[inline]
 pub(crate) fn servo_forces<S: Scalar>(
-    model: &Model,
+    model: &Structure,
     x: &[S],
     inputs: &InputValues<S>,
     elements: &mut ElementValues<S>,
@@ -228,19 +228,6 @@ pub(crate) fn quaternion_rate<S: Scalar>(q: [S; 4], omega: Vector3<S>) -> [S; 4]
         half * (w * omega.y + omega.z * i - omega.x * k),
         half * (w * omega.z + omega.x * j - omega.y * i),
     ]
-}
-
-/// Mass properties of a free rigid body.
-#[derive(Debug, Clone, PartialEq)]
-pub(crate) struct RigidBody {
-    /// 1 / mass, 1/kg.
-    pub inverse_mass: f64,
-    /// Centre of mass in body axes, m.
-    pub com: Vector3<f64>,
-    /// Inertia about the centre of mass, body axes.
-    pub inertia: Matrix3<f64>,
-    /// Its inverse.
-    pub inverse_inertia: Matrix3<f64>,
 }
 
 /// Newton-Euler for a free rigid body with world rotation `rotation` and

@@ -13,7 +13,8 @@
 use nalgebra::{DMatrix, Matrix3, UnitQuaternion, Vector3};
 
 use crate::dynamics::quaternion_at;
-use crate::model::{Inputs, JointMotion, Model, StateKind};
+use crate::elements::{Inputs, JointMotion, StateKind};
+use crate::model::Model;
 use crate::scalar::Dual64;
 
 /// Minimal (tangent) coordinates around a state.
@@ -93,7 +94,7 @@ impl Model {
         u.servo_force.eps = direction[2];
         u.platform_velocity.eps = direction[3];
         let mut ws = self.workspace_of::<Dual64>();
-        let mut out = vec![Dual64::from_re(0.0); self.signals.len()];
+        let mut out = vec![Dual64::from_re(0.0); self.structure.signals.len()];
         self.outputs_of(&xd, &u, &mut out, &mut ws);
         out.iter().map(|d| d.eps).collect()
     }
@@ -102,6 +103,7 @@ impl Model {
     pub fn tangent(&self, x: &[f64]) -> Tangent {
         let n = self.n_states();
         let floating: Vec<usize> = self
+            .structure
             .bodies
             .iter()
             .filter(|b| matches!(b.joint.motion, JointMotion::Floating))
@@ -116,6 +118,7 @@ impl Model {
         while state < n {
             if let Some(&q0) = floating.iter().find(|&&q0| q0 + 3 == state) {
                 let joint = self
+                    .structure
                     .bodies
                     .iter()
                     .find(|b| b.joint.q_offset == q0)
@@ -144,8 +147,8 @@ impl Model {
             } else {
                 expand[(state, reduced)] = 1.0;
                 project[(reduced, state)] = 1.0;
-                names.push(self.layout.names[state].clone());
-                kinds.push(self.layout.kinds[state]);
+                names.push(self.structure.layout.names[state].clone());
+                kinds.push(self.structure.layout.kinds[state]);
                 state += 1;
                 reduced += 1;
             }
@@ -153,7 +156,7 @@ impl Model {
         Tangent {
             names,
             kinds,
-            n_positions: self.layout.nv,
+            n_positions: self.structure.layout.nv,
             expand,
             project,
         }
@@ -172,14 +175,14 @@ impl Model {
         let mut moved = x.to_vec();
         let linear = &tangent.expand * nalgebra::DVector::from_column_slice(step);
         for (i, value) in moved.iter_mut().enumerate() {
-            if self.layout.kinds[i] != StateKind::Quaternion {
+            if self.structure.layout.kinds[i] != StateKind::Quaternion {
                 *value += linear[i];
             }
         }
         let mut reduced = 0;
         let mut state = 0;
         while state < moved.len() {
-            if self.layout.kinds[state] == StateKind::Quaternion {
+            if self.structure.layout.kinds[state] == StateKind::Quaternion {
                 let rotation = UnitQuaternion::from_scaled_axis(Vector3::new(
                     step[reduced],
                     step[reduced + 1],

@@ -1,332 +1,31 @@
-//! The assembled, immutable stage model: rigid bodies in a tree rooted at the
-//! world, force elements attached to them, the servo controller, and the named
-//! state layout. Built by [`crate::assembly`]; evaluated by [`crate::dynamics`].
+//! The assembled, immutable stage model: its structure (bodies, force
+//! elements, servo, state layout, signals), the evaluator chosen for it when
+//! it was built, and the robot description it was built from. Everything a
+//! user does with a model (simulate, linearise, find equilibria, read
+//! outputs) starts here; the evaluation paths below it see only the structure.
 
-use nalgebra::{Isometry3, Matrix3, Vector3};
+use nalgebra::{Matrix3, Vector3};
 
-use crate::lugre::LugreParams;
-use crate::reference::ReferenceSample;
-
-/// What a force element or sensor is attached to.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Frame {
-    /// The ground (or a link welded to it).
-    World,
-    /// A moving body, by index into [`Model::bodies`].
-    Body(usize),
-}
-
-/// The joint that connects a body to its parent.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum JointMotion {
-    /// Translation along a unit axis of the joint frame.
-    Prismatic {
-        /// Unit axis in the joint frame.
-        axis: Vector3<f64>,
-    },
-    /// Rotation about a unit axis of the joint frame through its origin.
-    Revolute {
-        /// Unit axis in the joint frame.
-        axis: Vector3<f64>,
-    },
-    /// Free motion: position (3) and unit quaternion (4) relative to the joint
-    /// frame; velocity as linear (3) and angular (3) velocity in the joint frame.
-    Floating,
-}
-
-impl JointMotion {
-    /// Number of position coordinates.
-    pub fn nq(&self) -> usize {
-        match self {
-            Self::Floating => 7,
-            _ => 1,
-        }
-    }
-
-    /// Number of velocity coordinates (degrees of freedom).
-    pub fn nv(&self) -> usize {
-        match self {
-            Self::Floating => 6,
-            _ => 1,
-        }
-    }
-
-    /// Whether the joint can rotate its child.
-    pub fn rotates(&self) -> bool {
-        !matches!(self, Self::Prismatic { .. })
-    }
-}
-
-/// A joint with its place in the state vector.
-#[derive(Debug, Clone)]
-pub struct Joint {
-    /// Joint name from the robot file.
-    pub name: String,
-    /// Kind and axis.
-    pub motion: JointMotion,
-    /// Joint frame in the parent body frame (world frame for root bodies).
-    pub origin: Isometry3<f64>,
-    /// Rotation of `origin` as a matrix (kept to avoid conversions in the hot path).
-    pub origin_rotation: Matrix3<f64>,
-    /// First position coordinate in the state vector.
-    pub q_offset: usize,
-    /// First velocity coordinate, counted within the velocity block.
-    pub v_offset: usize,
-}
-
-/// A rigid body: one moving link and every link welded to it by fixed joints.
-#[derive(Debug, Clone)]
-pub struct Body {
-    /// Name of the body's own link.
-    pub name: String,
-    /// Links merged into this body (its own link first).
-    pub links: Vec<String>,
-    /// Parent body, `None` for bodies jointed to the world.
-    pub parent: Option<usize>,
-    /// The joint to the parent.
-    pub joint: Joint,
-    /// Mass, kg.
-    pub mass: f64,
-    /// Centre of mass in the body frame, m.
-    pub com: Vector3<f64>,
-    /// Inertia about the centre of mass, body-frame axes, kg m^2.
-    pub inertia: Matrix3<f64>,
-    /// Velocity indices of every joint between the world and this body.
-    pub chain: Vec<usize>,
-    /// The mass block (subtree of one root body) this body belongs to.
-    pub block: usize,
-    /// Positions of `chain` within that block.
-    pub chain_local: Vec<usize>,
-    /// Whether any joint between the world and this body rotates (otherwise its
-    /// angular velocity and acceleration are zero and its inertia never enters).
-    pub turns: bool,
-}
-
-/// The joint-space mass matrix is block diagonal: one block per subtree hanging
-/// from the world. Each block is factored on its own, and blocks without
-/// rotating joints are constant and kept inverted.
-#[derive(Debug, Clone, PartialEq)]
-pub(crate) struct MassBlock {
-    /// Velocity indices of the block, ascending.
-    pub dofs: Vec<usize>,
-    /// Bodies of the subtree.
-    pub bodies: Vec<usize>,
-    /// Row-major inverse when the block does not depend on the configuration.
-    pub constant_inverse: Option<Vec<f64>>,
-    /// When the block is one floating body: that body and its mass
-    /// properties, for the closed-form solve.
-    pub free_body: Option<(usize, crate::laws::RigidBody)>,
-}
-
-/// A linear six-axis bushing (friction isolator).
-#[derive(Debug, Clone)]
-pub struct Isolator {
-    /// Element name.
-    pub name: String,
-    /// Parent side.
-    pub parent: Frame,
-    /// Child side.
-    pub child: Frame,
-    /// Attach frame in the parent body frame.
-    pub parent_attach: Isometry3<f64>,
-    /// Attach frame in the child body frame (coincides with the parent's at the
-    /// zero configuration).
-    pub child_attach: Isometry3<f64>,
-    /// Stiffness x, y, z (N/m) and rx, ry, rz (N m/rad) in attach-frame axes.
-    pub stiffness: [f64; 6],
-    /// Damping x, y, z (N s/m) and rx, ry, rz (N m s/rad).
-    pub damping: [f64; 6],
-    /// Rotations of the two attach frames as matrices.
-    pub attach_rotations: [Matrix3<f64>; 2],
-    /// Whether each attach rotation is the identity (its product can be skipped).
-    pub attach_is_identity: [bool; 2],
-}
-
-/// A LuGre contact between a body and its counter-surface. The counter-surface
-/// (rail or platform) is fixed to the world and moves along the contact axis at
-/// the platform velocity.
-#[derive(Debug, Clone)]
-pub struct FrictionContact {
-    /// Element name.
-    pub name: String,
-    /// Sliding body.
-    pub body: usize,
-    /// Contact point in the body frame.
-    pub point: Vector3<f64>,
-    /// Sliding axis in world coordinates (the rail direction).
-    pub axis: Vector3<f64>,
-    /// LuGre parameters.
-    pub lugre: LugreParams,
-    /// Index of the bristle state z in the state vector.
-    pub z_index: usize,
-    /// `point . axis` in the zero configuration (for contact displacements).
-    pub zero_offset: f64,
-}
-
-/// A point on a body and a world-fixed direction: actuators (force along the
-/// direction at the point) and sensors (displacement of the point along it).
-#[derive(Debug, Clone)]
-pub struct PointAxis {
-    /// Element name.
-    pub name: String,
-    /// Body carrying the element.
-    pub body: usize,
-    /// Point in the body frame.
-    pub point: Vector3<f64>,
-    /// Direction in world coordinates (fixed: a scale or magnet track on the ground).
-    pub axis: Vector3<f64>,
-    /// `point . axis` in the zero configuration; sensor readings are relative to it.
-    pub zero_offset: f64,
-}
-
-/// PID servo acting through an actuator on a sensor reading.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Controller {
-    /// Index into [`Model::sensors`].
-    pub sensor: usize,
-    /// Index into [`Model::actuators`].
-    pub actuator: usize,
-    /// Proportional gain, N/m.
-    pub k: f64,
-    /// Derivative gain, N s/m.
-    pub c: f64,
-    /// Integral gain, N/(m s).
-    pub k_i: f64,
-    /// Index of the integral of the tracking error in the state vector (present
-    /// only when k_i > 0, so that a PD loop has no spurious zero eigenvalue).
-    pub integral_index: Option<usize>,
-}
-
-/// What a state entry is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum StateKind {
-    /// Joint translation, m.
-    Translation,
-    /// Joint angle, rad.
-    Angle,
-    /// Quaternion component, 1.
-    Quaternion,
-    /// Linear velocity, m/s.
-    LinearVelocity,
-    /// Angular velocity, rad/s.
-    AngularVelocity,
-    /// LuGre bristle deflection z, m.
-    Bristle,
-    /// Integral of the tracking error, m s.
-    ErrorIntegral,
-}
-
-impl StateKind {
-    /// SI unit.
-    pub fn unit(self) -> &'static str {
-        match self {
-            Self::Translation => "m",
-            Self::Angle => "rad",
-            Self::Quaternion => "1",
-            Self::LinearVelocity => "m/s",
-            Self::AngularVelocity => "rad/s",
-            Self::Bristle => "m",
-            Self::ErrorIntegral => "m s",
-        }
-    }
-}
-
-/// Names, kinds and blocks of the state vector
-/// `[positions (nq) | velocities (nv) | bristles (nz) | error integral (0 or 1)]`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct StateLayout {
-    /// Entry names, e.g. `table_x.q`, `table.qw`, `bearing_friction.z`.
-    pub names: Vec<String>,
-    /// Entry kinds.
-    pub kinds: Vec<StateKind>,
-    /// Typical magnitude per entry, used to scale absolute tolerances.
-    pub nominal: Vec<f64>,
-    /// Number of position coordinates.
-    pub nq: usize,
-    /// Number of velocity coordinates.
-    pub nv: usize,
-    /// Number of bristle states.
-    pub nz: usize,
-}
-
-impl StateLayout {
-    /// Total number of states.
-    pub fn len(&self) -> usize {
-        self.names.len()
-    }
-
-    /// Whether the model has no state at all.
-    pub fn is_empty(&self) -> bool {
-        self.names.is_empty()
-    }
-
-    /// Index of a named entry.
-    pub fn index(&self, name: &str) -> Option<usize> {
-        self.names.iter().position(|n| n == name)
-    }
-
-    /// Start of the velocity block.
-    pub fn v_start(&self) -> usize {
-        self.nq
-    }
-
-    /// Start of the bristle block.
-    pub fn z_start(&self) -> usize {
-        self.nq + self.nv
-    }
-}
-
-/// Inputs of the model: what a co-simulator or a scenario drives.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct Inputs {
-    /// Servo reference, m and m/s.
-    pub reference: ReferenceSample,
-    /// Force added to the actuator force, N (the whole force when there is no controller).
-    pub servo_force: f64,
-    /// Counter-surface velocity along every contact axis, m/s.
-    pub platform_velocity: f64,
-}
-
-impl Inputs {
-    /// Names and units of the inputs, in a fixed order.
-    pub const NAMES: [(&'static str, &'static str); 4] = [
-        ("reference_position", "m"),
-        ("reference_velocity", "m/s"),
-        ("servo_force", "N"),
-        ("platform_velocity", "m/s"),
-    ];
-}
-
-/// A named output signal.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct SignalInfo {
-    /// Name, e.g. `encoder.position`.
-    pub name: String,
-    /// SI unit.
-    pub unit: &'static str,
-}
+use crate::dynamics::{EvaluationPath, InputValues, Workspace};
+use crate::elements::{
+    Body, Controller, FrictionContact, Inputs, Isolator, PointAxis, SignalInfo, StateLayout,
+    Structure,
+};
+use crate::evaluator::Evaluator;
+use crate::robot::RobotSpec;
+use crate::scalar::Scalar;
 
 /// The assembled stage. Built once by [`crate::assemble`] and immutable: its
-/// fields are read through methods, and parameter changes build a new model
+/// parts are read through methods, and parameter changes build a new model
 /// (so nothing resolved at build time can go stale).
 #[derive(Debug, Clone)]
 pub struct Model {
     pub(crate) name: String,
-    pub(crate) bodies: Vec<Body>,
-    pub(crate) isolators: Vec<Isolator>,
-    pub(crate) frictions: Vec<FrictionContact>,
-    pub(crate) actuators: Vec<PointAxis>,
-    pub(crate) sensors: Vec<PointAxis>,
-    pub(crate) controller: Option<Controller>,
-    pub(crate) gravity: Vector3<f64>,
-    pub(crate) layout: StateLayout,
-    pub(crate) signals: Vec<SignalInfo>,
-    /// Diagonal blocks of the mass matrix.
-    pub(crate) mass_blocks: Vec<MassBlock>,
+    pub(crate) structure: Structure,
     /// How the right-hand side is evaluated (chosen once, when built).
-    pub(crate) evaluator: crate::evaluator::Evaluator,
+    pub(crate) evaluator: Evaluator,
     /// The robot file after the scenario's overrides: what the parameter table reads.
-    pub(crate) robot: crate::robot::RobotSpec,
+    pub(crate) robot: RobotSpec,
 }
 
 impl Model {
@@ -337,76 +36,157 @@ impl Model {
 
     /// Moving bodies, parents before children.
     pub fn bodies(&self) -> &[Body] {
-        &self.bodies
+        &self.structure.bodies
     }
 
     /// Isolator bushings.
     pub fn isolators(&self) -> &[Isolator] {
-        &self.isolators
+        &self.structure.isolators
     }
 
     /// LuGre contacts.
     pub fn frictions(&self) -> &[FrictionContact] {
-        &self.frictions
+        &self.structure.frictions
     }
 
     /// Actuators.
     pub fn actuators(&self) -> &[PointAxis] {
-        &self.actuators
+        &self.structure.actuators
     }
 
     /// Sensors.
     pub fn sensors(&self) -> &[PointAxis] {
-        &self.sensors
+        &self.structure.sensors
     }
 
     /// The servo controller, if any.
     pub fn controller(&self) -> Option<&Controller> {
-        self.controller.as_ref()
+        self.structure.controller.as_ref()
     }
 
     /// Gravity, world frame, m/s^2.
     pub fn gravity(&self) -> &Vector3<f64> {
-        &self.gravity
+        &self.structure.gravity
     }
 
     /// State layout.
     pub fn layout(&self) -> &StateLayout {
-        &self.layout
+        &self.structure.layout
     }
 
     /// Output signals, in the order [`Model::outputs`] writes them.
     pub fn signals(&self) -> &[SignalInfo] {
-        &self.signals
+        &self.structure.signals
     }
-}
 
-impl Model {
     /// The robot description the model was built from, after the scenario's
     /// overrides (the values [`crate::Parameter::read`] reads).
-    pub fn robot(&self) -> &crate::robot::RobotSpec {
+    pub fn robot(&self) -> &RobotSpec {
         &self.robot
     }
 
     /// Number of states.
     pub fn n_states(&self) -> usize {
-        self.layout.len()
+        self.structure.n_states()
     }
 
     /// Index of a named output signal.
     pub fn signal_index(&self, name: &str) -> Option<usize> {
-        self.signals.iter().position(|s| s.name == name)
+        self.signals().iter().position(|s| s.name == name)
     }
 
     /// The state at the zero configuration: joints at zero, quaternions at the
     /// identity, everything else zero.
     pub fn zero_state(&self) -> Vec<f64> {
-        let mut x = vec![0.0; self.n_states()];
-        for body in &self.bodies {
-            if matches!(body.joint.motion, JointMotion::Floating) {
-                x[body.joint.q_offset + 3] = 1.0;
-            }
-        }
-        x
+        self.structure.zero_state()
+    }
+
+    /// Which evaluation [`Model::rhs`] takes for this model.
+    pub fn evaluation_path(&self) -> EvaluationPath {
+        self.evaluator.path()
+    }
+
+    /// A workspace sized for this model, for `f64` evaluation.
+    pub fn workspace(&self) -> Workspace<f64> {
+        self.workspace_of()
+    }
+
+    /// A workspace sized for this model, for any scalar type.
+    pub fn workspace_of<S: Scalar>(&self) -> Workspace<S> {
+        self.structure.workspace_with(self.evaluator.scratch())
+    }
+
+    /// State derivative `dx = f(x, u)`. `x` and `dx` have [`Model::n_states`] entries.
+    /// The evaluation depends on the structure (see [`EvaluationPath`]);
+    /// [`Model::rhs_general`] is the general path every model can take.
+    #[inline]
+    pub fn rhs(&self, x: &[f64], inputs: &Inputs, dx: &mut [f64], ws: &mut Workspace) {
+        self.evaluator
+            .rhs(&self.structure, x, &inputs.values(), dx, ws);
+    }
+
+    /// [`Model::rhs`] in any scalar type: the evaluation simulation uses,
+    /// differentiated exactly with dual numbers.
+    #[inline]
+    pub fn rhs_of<S: Scalar>(
+        &self,
+        x: &[S],
+        inputs: &InputValues<S>,
+        dx: &mut [S],
+        ws: &mut Workspace<S>,
+    ) {
+        self.evaluator.rhs(&self.structure, x, inputs, dx, ws);
+    }
+
+    /// State derivative by the general recursive dynamics, for any model and
+    /// scalar (the reference every faster evaluation is tested against).
+    pub fn rhs_general<S: Scalar>(
+        &self,
+        x: &[S],
+        inputs: &InputValues<S>,
+        dx: &mut [S],
+        ws: &mut Workspace<S>,
+    ) {
+        self.structure.rhs_general(x, inputs, dx, ws);
+    }
+
+    /// Kinematics and force elements at state x; results stay in `ws`
+    /// (`ws.elements`).
+    pub fn evaluate(&self, x: &[f64], inputs: &Inputs, ws: &mut Workspace) {
+        self.structure.evaluate(x, inputs, ws);
+    }
+
+    /// Writes every output signal (see [`Model::signals`]) at state x.
+    pub fn outputs(&self, x: &[f64], inputs: &Inputs, out: &mut [f64], ws: &mut Workspace) {
+        self.structure.outputs(x, inputs, out, ws);
+    }
+
+    /// [`Model::outputs`] in any scalar type: with dual numbers it gives exact
+    /// derivatives of the outputs (e.g. their direct dependence on the inputs).
+    pub fn outputs_of<S: Scalar>(
+        &self,
+        x: &[S],
+        inputs: &InputValues<S>,
+        out: &mut [S],
+        ws: &mut Workspace<S>,
+    ) {
+        self.structure.outputs_of(x, inputs, out, ws);
+    }
+
+    /// Kinetic energy + isolator springs + bristle springs sigma0 z^2 / 2 +
+    /// gravitational potential (relative to the world origin), J. With no servo
+    /// and no platform motion this never increases.
+    pub fn stored_energy(&self, x: &[f64], ws: &mut Workspace) -> f64 {
+        self.structure.stored_energy(x, ws)
+    }
+
+    /// The joint-space mass matrix at state x (positions are read from x).
+    pub fn mass_matrix(&self, x: &[f64]) -> nalgebra::DMatrix<f64> {
+        crate::dynamics::mass_matrix(&self.structure, x)
+    }
+
+    /// World pose (rotation, origin) of every body at state x.
+    pub fn body_poses(&self, x: &[f64]) -> Vec<(Matrix3<f64>, Vector3<f64>)> {
+        self.structure.body_poses(x)
     }
 }

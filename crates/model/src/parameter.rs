@@ -47,51 +47,7 @@ use crate::lugre::{InvalidLugreParameter, LugreKey, LugreParams};
 use crate::model::Model;
 use crate::robot::{IsolatorKey, IsolatorSpec, RobotSpec};
 use crate::rule::Rule;
-use crate::scenario::Scenario;
-
-/// A servo gain.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Gain {
-    /// Proportional gain `k`, N/m.
-    K,
-    /// Derivative gain `c`, N s/m.
-    C,
-    /// Integral gain `k_i`, N/(m s).
-    KI,
-}
-
-impl Gain {
-    /// The three gains in path order.
-    pub const ALL: [Gain; 3] = [Gain::K, Gain::C, Gain::KI];
-
-    /// What the scenario reader and every writer require of a gain.
-    pub const RULE: Rule = Rule::NonNegative;
-
-    /// Key under `[controller]`.
-    pub fn key(self) -> &'static str {
-        match self {
-            Gain::K => "k",
-            Gain::C => "c",
-            Gain::KI => "k_i",
-        }
-    }
-
-    fn unit(self) -> &'static str {
-        match self {
-            Gain::K => "N/m",
-            Gain::C => "N.s/m",
-            Gain::KI => "N/(m.s)",
-        }
-    }
-
-    fn description(self) -> &'static str {
-        match self {
-            Gain::K => "servo proportional gain",
-            Gain::C => "servo derivative gain",
-            Gain::KI => "servo integral gain",
-        }
-    }
-}
+use crate::scenario::{Gain, Scenario};
 
 /// A coordinate of a point (`x`, `y`, `z`).
 const POINT_KEYS: [&str; 3] = ["x", "y", "z"];
@@ -332,7 +288,7 @@ impl Parameter {
     /// velocity (an input, not part of a model) and for relative parameters.
     pub fn read_model(&self, model: &Model) -> Option<f64> {
         match self.target {
-            Target::Gain(gain) => model.controller.as_ref().map(|c| match gain {
+            Target::Gain(gain) => model.structure.controller.as_ref().map(|c| match gain {
                 Gain::K => c.k,
                 Gain::C => c.c,
                 Gain::KI => c.k_i,

@@ -18,13 +18,13 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::dynamics::{InputValues, Workspace};
+use crate::elements::{Frame, JointMotion, RigidBody, Structure};
 use crate::laws::{
-    RigidBody, bushing_wrench, cast3, cast33, newton_euler, quaternion_rate, quaternion_rotation,
-    relative, relative_rotation, rotate, rotate_back, rotation_log, servo_forces,
+    bushing_wrench, cast3, cast33, newton_euler, quaternion_rate, quaternion_rotation, relative,
+    relative_rotation, rotate, rotate_back, rotation_log, servo_forces,
 };
-use crate::model::{Frame, JointMotion, Model};
 use crate::scalar::Scalar;
+use crate::values::{ElementValues, InputValues};
 
 /// A floating body jointed to the world.
 #[derive(Debug, Clone, PartialEq)]
@@ -205,7 +205,7 @@ impl RootedPlan {
     /// The plan for `model`, or `None` when some body hangs from another body,
     /// turns about a revolute joint or floats with a singular inertia (the
     /// general path handles those).
-    pub(crate) fn build(model: &Model) -> Option<Self> {
+    pub(crate) fn build(model: &Structure) -> Option<Self> {
         let mut carriers = Vec::with_capacity(model.bodies.len());
         let mut floating = Vec::new();
         let mut rails = Vec::new();
@@ -380,24 +380,25 @@ impl RootedPlan {
     /// The state derivative.
     pub(crate) fn rhs<S: Scalar>(
         &self,
-        model: &Model,
+        model: &Structure,
         x: &[S],
         inputs: &InputValues<S>,
         dx: &mut [S],
-        ws: &mut Workspace<S>,
+        scratch: &mut RootedScratch<S>,
+        elements: &mut ElementValues<S>,
     ) {
         debug_assert!(
-            ws.rooted.floating.len() == self.floating.len()
-                && ws.rooted.rails.len() == self.rails.len(),
+            scratch.floating.len() == self.floating.len()
+                && scratch.rails.len() == self.rails.len(),
             "a workspace made for another model"
         );
-        self.body_states(x, dx, &mut ws.rooted);
-        self.isolator_forces(model, &mut ws.rooted);
-        self.servo(model, x, inputs, ws);
-        self.friction_forces(model, x, inputs, dx, &mut ws.rooted);
-        self.accelerations(dx, &ws.rooted);
+        self.body_states(x, dx, scratch);
+        self.isolator_forces(model, scratch);
+        self.servo(model, x, inputs, scratch, elements);
+        self.friction_forces(model, x, inputs, dx, scratch);
+        self.accelerations(dx, scratch);
         if let Some(index) = model.controller.as_ref().and_then(|c| c.integral_index) {
-            dx[index] = ws.elements.tracking_error;
+            dx[index] = elements.tracking_error;
         }
     }
 
@@ -514,7 +515,7 @@ impl RootedPlan {
     }
 
     /// Bushing wrenches (the law and its conventions: [`bushing_wrench`]).
-    fn isolator_forces<S: Scalar>(&self, model: &Model, scratch: &mut RootedScratch<S>) {
+    fn isolator_forces<S: Scalar>(&self, model: &Structure, scratch: &mut RootedScratch<S>) {
         for (k, (isolator, element)) in self.isolators.iter().zip(&model.isolators).enumerate() {
             let (parent, child) = (&isolator.parent, &isolator.child);
             let parent_rotation = Self::end_rotation(parent, scratch);
@@ -616,21 +617,22 @@ impl RootedPlan {
     /// Sensor readings, the servo law and the actuator forces.
     fn servo<S: Scalar>(
         &self,
-        model: &Model,
+        model: &Structure,
         x: &[S],
         inputs: &InputValues<S>,
-        ws: &mut Workspace<S>,
+        scratch: &mut RootedScratch<S>,
+        elements: &mut ElementValues<S>,
     ) {
         for (k, sensor) in self.sensors.iter().enumerate() {
-            let (position, velocity, _) = Self::reading(sensor, &ws.rooted);
-            ws.elements.sensor_position[k] = position;
-            ws.elements.sensor_velocity[k] = velocity;
+            let (position, velocity, _) = Self::reading(sensor, scratch);
+            elements.sensor_position[k] = position;
+            elements.sensor_velocity[k] = velocity;
         }
-        servo_forces(model, x, inputs, &mut ws.elements);
-        for (actuator, force) in self.actuators.iter().zip(&ws.elements.actuator_force) {
+        servo_forces(model, x, inputs, elements);
+        for (actuator, force) in self.actuators.iter().zip(&elements.actuator_force) {
             if !force.is_exactly_zero() {
-                let (_, _, arm) = Self::reading(actuator, &ws.rooted);
-                Self::push(actuator, &arm, *force, &mut ws.rooted);
+                let (_, _, arm) = Self::reading(actuator, scratch);
+                Self::push(actuator, &arm, *force, scratch);
             }
         }
     }
@@ -638,7 +640,7 @@ impl RootedPlan {
     /// LuGre forces and bristle rates.
     fn friction_forces<S: Scalar>(
         &self,
-        model: &Model,
+        model: &Structure,
         x: &[S],
         inputs: &InputValues<S>,
         dx: &mut [S],

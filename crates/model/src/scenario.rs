@@ -32,8 +32,8 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use crate::error::LoadError;
-use crate::parameter::Gain;
 use crate::reference::Reference;
+use crate::rule::Rule;
 
 /// The scenario file as written, before checks.
 #[derive(Debug, Clone, Deserialize)]
@@ -96,6 +96,50 @@ pub struct ControllerSettings {
     /// Integral gain, N/(m s).
     #[serde(default)]
     pub k_i: f64,
+}
+
+/// A servo gain.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Gain {
+    /// Proportional gain `k`, N/m.
+    K,
+    /// Derivative gain `c`, N s/m.
+    C,
+    /// Integral gain `k_i`, N/(m s).
+    KI,
+}
+
+impl Gain {
+    /// The three gains in path order.
+    pub const ALL: [Gain; 3] = [Gain::K, Gain::C, Gain::KI];
+
+    /// What the scenario reader and every writer require of a gain.
+    pub const RULE: Rule = Rule::NonNegative;
+
+    /// Key under `[controller]`.
+    pub fn key(self) -> &'static str {
+        match self {
+            Gain::K => "k",
+            Gain::C => "c",
+            Gain::KI => "k_i",
+        }
+    }
+
+    pub(crate) fn unit(self) -> &'static str {
+        match self {
+            Gain::K => "N/m",
+            Gain::C => "N.s/m",
+            Gain::KI => "N/(m.s)",
+        }
+    }
+
+    pub(crate) fn description(self) -> &'static str {
+        match self {
+            Gain::K => "servo proportional gain",
+            Gain::C => "servo derivative gain",
+            Gain::KI => "servo integral gain",
+        }
+    }
 }
 
 impl ControllerSettings {

@@ -7,10 +7,11 @@
 //! are the same functions both paths call. A test checks that both paths give
 //! the same state derivative.
 
-use crate::dynamics::{InputValues, Workspace};
+use crate::elements::{Inputs, Structure};
 use crate::laws::bushing_force;
-use crate::model::{Inputs, Model};
+use crate::rooted::RootedScratch;
 use crate::scalar::Scalar;
+use crate::values::InputValues;
 
 /// Constant Jacobian rows of a translational model (row-major, `nv` per row).
 #[derive(Debug, Clone, PartialEq)]
@@ -34,10 +35,10 @@ pub(crate) struct TranslationalMap {
 impl TranslationalMap {
     /// Reads the rows off the general kinematics: velocities are linear in the
     /// joint rates, so unit joint rates give the Jacobian columns.
-    pub(crate) fn build(model: &Model, mass_inverse: &nalgebra::DMatrix<f64>) -> Self {
+    pub(crate) fn build(model: &Structure, mass_inverse: &nalgebra::DMatrix<f64>) -> Self {
         let nv = model.layout.nv;
         let nq = model.layout.nq;
-        let mut ws = model.workspace();
+        let mut ws = model.workspace_with(RootedScratch::empty());
         let zero = model.zero_state();
         let inputs = Inputs::default();
         let (nf, ni, ns, na) = (
@@ -116,18 +117,18 @@ impl TranslationalMap {
     /// constant (fully unrolled products); the arithmetic is the same.
     pub(crate) fn rhs<S: Scalar>(
         &self,
-        model: &Model,
+        model: &Structure,
         x: &[S],
         inputs: &InputValues<S>,
         dx: &mut [S],
-        ws: &mut Workspace<S>,
+        generalized: &mut [S],
     ) {
         match self.nv {
-            1 => self.rhs_sized::<1, S>(model, x, inputs, dx, ws),
-            2 => self.rhs_sized::<2, S>(model, x, inputs, dx, ws),
-            3 => self.rhs_sized::<3, S>(model, x, inputs, dx, ws),
-            4 => self.rhs_sized::<4, S>(model, x, inputs, dx, ws),
-            _ => self.rhs_sized::<DYNAMIC, S>(model, x, inputs, dx, ws),
+            1 => self.rhs_sized::<1, S>(model, x, inputs, dx, generalized),
+            2 => self.rhs_sized::<2, S>(model, x, inputs, dx, generalized),
+            3 => self.rhs_sized::<3, S>(model, x, inputs, dx, generalized),
+            4 => self.rhs_sized::<4, S>(model, x, inputs, dx, generalized),
+            _ => self.rhs_sized::<DYNAMIC, S>(model, x, inputs, dx, generalized),
         }
     }
 
@@ -135,18 +136,18 @@ impl TranslationalMap {
     #[inline(always)]
     fn rhs_sized<const N: usize, S: Scalar>(
         &self,
-        model: &Model,
+        model: &Structure,
         x: &[S],
         inputs: &InputValues<S>,
         dx: &mut [S],
-        ws: &mut Workspace<S>,
+        generalized: &mut [S],
     ) {
         let nv = row_length::<N>(self.nv);
         let nq = model.layout.nq;
         let (q, v) = (&x[..nq], &x[nq..nq + nv]);
         let (q, v) = (&q[..nv], &v[..nv]);
         dx[..nq].copy_from_slice(v);
-        let force = &mut ws.generalized[..nv];
+        let force = &mut generalized[..nv];
         for (f, g) in force.iter_mut().zip(&self.gravity[..nv]) {
             *f = S::constant(*g);
         }

@@ -1,0 +1,58 @@
+//! The values one evaluation works with in any scalar type: the inputs
+//! ([`InputValues`]) and what each force element gave ([`ElementValues`]).
+
+use crate::elements::Inputs;
+use crate::reference::ReferenceSample;
+use crate::scalar::Scalar;
+
+/// Model inputs in any scalar type (see [`Inputs`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InputValues<S> {
+    /// Reference position, m.
+    pub reference_position: S,
+    /// Reference velocity, m/s.
+    pub reference_velocity: S,
+    /// External servo force, N.
+    pub servo_force: S,
+    /// Counter-surface velocity, m/s.
+    pub platform_velocity: S,
+}
+
+impl Inputs {
+    /// The inputs as constants of scalar type S.
+    pub fn values<S: Scalar>(&self) -> InputValues<S> {
+        InputValues {
+            reference_position: S::constant(self.reference.position),
+            reference_velocity: S::constant(self.reference.velocity),
+            servo_force: S::constant(self.servo_force),
+            platform_velocity: S::constant(self.platform_velocity),
+        }
+    }
+}
+
+/// Values of the force elements at the last evaluated state.
+#[derive(Debug, Clone, Default)]
+pub struct ElementValues<S = f64> {
+    /// LuGre friction force per contact (positive opposes positive sliding), N.
+    pub friction_force: Vec<S>,
+    /// Sliding velocity per contact, m/s.
+    pub slip_velocity: Vec<S>,
+    /// Bristle rate z' per contact, m/s.
+    pub z_rate: Vec<S>,
+    /// Displacement of each contact point along its axis from the zero configuration, m.
+    pub contact_displacement: Vec<S>,
+    /// Force per actuator, N.
+    pub actuator_force: Vec<S>,
+    /// Reading per sensor, m.
+    pub sensor_position: Vec<S>,
+    /// Rate per sensor, m/s.
+    pub sensor_velocity: Vec<S>,
+    /// Deflection per isolator: translation (m) then rotation vector (rad), attach axes.
+    pub isolator_deflection: Vec<[S; 6]>,
+    /// Deflection rate per isolator.
+    pub isolator_rate: Vec<[S; 6]>,
+    /// Reference used by the controller.
+    pub reference: ReferenceSample,
+    /// Tracking error x - x_r of the controller, m.
+    pub tracking_error: S,
+}
