@@ -1,6 +1,6 @@
 //! `modelDescription.xml` for FMI 2.0 Co-Simulation: unit definitions, the
 //! co-simulation capabilities, the default experiment from the scenario, every
-//! variable of [`crate::variables`], and the model structure (outputs and
+//! variable of [`crate::variables()`], and the model structure (outputs and
 //! initial unknowns). The GUID is a hash of the description itself, so the
 //! same model always gets the same GUID and any change gets a new one.
 

@@ -6,6 +6,26 @@
 //! the bearings; and sweeps of stability over one or two parameters. [`lab`]
 //! measures identification data (f_ss(v), the pre-motion FRF) on the simulated
 //! stage, as a lab would, for fistage-ident to fit.
+//!
+//! ```
+//! use fistage_analysis::modal_analysis;
+//! use fistage_model::{EquilibriumKind, Inputs};
+//!
+//! let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+//! let loaded = fistage_model::load(&root.join("scenarios/paper/fig05b_fi.toml"))?;
+//! let model = &loaded.model;
+//! let inputs = Inputs { platform_velocity: 0.02, ..Inputs::default() };
+//! let analysis =
+//!     modal_analysis(model, &inputs, EquilibriumKind::Slipping, &model.zero_state())
+//!         .expect("the slipping equilibrium exists");
+//! // Fig. 5b's stage with FI: its slipping equilibrium is linearly stable
+//! // (the limit cycle it runs into from rest is the bistable case of the paper).
+//! println!("largest real part {:.3} 1/s", analysis.max_real_part);
+//! assert!(analysis.stable && analysis.max_real_part < 0.0);
+//! # Ok::<(), fistage_model::LoadError>(())
+//! ```
+
+#![warn(missing_docs)]
 
 pub mod eigen;
 pub mod lab;

@@ -1,5 +1,9 @@
 //! The `fistage` command-line program: a thin face over the library crates.
 
+// The doc comments of the argument structs are the program's --help texts,
+// written for a terminal (`out/<scenario>`, `[sweep]`), not for rustdoc.
+#![allow(rustdoc::broken_intra_doc_links, rustdoc::invalid_html_tags)]
+
 mod bench;
 mod bench_fmu;
 mod check;

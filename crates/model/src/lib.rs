@@ -1,13 +1,62 @@
-//! fistage-model: robot (URDF) and scenario (TOML) files turned into an immutable,
-//! validated [`Model`] of a precision stage, and the model's physics: state layout,
-//! right-hand side `dx = f(x, u)`, outputs and stored energy.
+//! fistage-model: robot (URDF) and scenario (TOML) files turned into an
+//! immutable, validated [`Model`] of a precision stage, and the model's
+//! physics: state layout, right-hand side `dx = f(x, u)` in `f64` or dual
+//! numbers (exact Jacobians), equilibria, outputs and stored energy.
 //!
-//! Data flow: [`RobotSpec`] + [`Scenario`] → [`assemble`] → [`Model`], evaluated
-//! with a per-thread [`Workspace`].
+//! # A tour
+//!
+//! - **Files to model.** [`load`] reads a scenario, the robot file it names
+//!   and assembles the [`Model`]; [`RobotSpec`] and [`Scenario`] are the two
+//!   files checked on their own, [`assemble`] joins them. Every error names
+//!   the file, the element or key, and what is wrong ([`LoadError`]).
+//! - **Parameters.** Every tunable quantity is one entry of the parameter
+//!   table ([`Parameter`]): a path such as `controller.k` or
+//!   `overrides.bearing_friction.sigma0`, its unit and validity [`Rule`].
+//!   Scenario overrides, sweeps and FMU parameters all write through it.
+//! - **Evaluation.** [`Model::rhs`] gives the state derivative with a
+//!   per-thread [`Workspace`]; the evaluation is chosen once, when the model
+//!   is built, from its structure ([`EvaluationPath`]), and the exact
+//!   Jacobian ([`Model::jacobian`]) differentiates that same code.
+//! - **Equilibria.** [`Model::equilibrium`] finds the sticking or slipping
+//!   equilibrium by Newton's method with the exact Jacobian.
+//!
+//! # Example
+//!
+//! ```
+//! use fistage_model::{EquilibriumKind, Inputs, Parameter, RobotSpec, assemble, load};
+//!
+//! let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+//! let loaded = load(&root.join("scenarios/paper/fig05b_fi.toml"))?;
+//! let model = &loaded.model;
+//! println!("{} states: {:?}", model.n_states(), model.layout().names);
+//!
+//! // The state derivative at rest, with the platform moving at 20 mm/s.
+//! let inputs = Inputs { platform_velocity: 0.02, ..Inputs::default() };
+//! let x = model.zero_state();
+//! let mut dx = vec![0.0; model.n_states()];
+//! model.rhs(&x, &inputs, &mut dx, &mut model.workspace());
+//!
+//! // The slipping equilibrium: nothing moves, the bristles are deflected.
+//! let slipping = model.equilibrium(EquilibriumKind::Slipping, &inputs, &x).expect("exists");
+//! let mut rate = vec![0.0; model.n_states()];
+//! model.rhs(&slipping, &inputs, &mut rate, &mut model.workspace());
+//! assert!(rate.iter().all(|r| r.abs() < 1e-6));
+//!
+//! // A stiffer servo, through the parameter table (checked by its rule).
+//! let mut scenario = loaded.scenario.clone();
+//! let mut robot = RobotSpec::from_file(&scenario.robot)?;
+//! Parameter::resolve("controller.k", &scenario, &robot)?.write(&mut scenario, &mut robot, 1e5)?;
+//! let (_, stiffer) = assemble(robot, &scenario)?;
+//! assert_eq!(stiffer.controller().map(|c| c.k), Some(1e5));
+//! # Ok::<(), fistage_model::LoadError>(())
+//! ```
+
+#![warn(missing_docs)]
 
 pub mod assembly;
 pub mod body_motion;
 pub mod dynamics;
+pub mod elements;
 pub mod equilibrium;
 pub mod error;
 mod evaluator;
@@ -23,24 +72,25 @@ pub mod rule;
 pub mod scalar;
 pub mod scenario;
 mod translational;
+mod values;
 
 pub use assembly::{Loaded, assemble, load};
-pub use body_motion::{BodyMotion, BodyWrench};
 pub use dynamics::{ElementValues, EvaluationPath, InputValues, Workspace};
+pub use elements::{
+    Body, BodyMotion, BodyWrench, Controller, Frame, FrictionContact, Inputs, Isolator, Joint,
+    JointMotion, PointAxis, SignalInfo, StateKind, StateLayout,
+};
 pub use equilibrium::{EquilibriumError, EquilibriumKind};
 pub use error::LoadError;
 pub use linearize::Tangent;
 pub use lugre::{InvalidLugreParameter, LugreKey, LugreParams};
-pub use model::{
-    Body, Controller, Frame, FrictionContact, Inputs, Isolator, Joint, JointMotion, Model,
-    PointAxis, SignalInfo, StateKind, StateLayout,
-};
-pub use parameter::{Gain, Parameter};
+pub use model::Model;
+pub use parameter::Parameter;
 pub use reference::{Reference, ReferenceSample};
 pub use robot::{FISTAGE_NS, IsolatorKey, RobotSpec};
 pub use rule::{Rule, RuleViolation};
 pub use scalar::{Dual64, Scalar};
 pub use scenario::{
-    ControllerSettings, EngineKind, Override, PayloadSettings, RapierSettings, Scenario,
+    ControllerSettings, EngineKind, Gain, Override, PayloadSettings, RapierSettings, Scenario,
     SolverSettings, Start, StopSettings,
 };

@@ -6,8 +6,7 @@
 //! panels without drawable data say "no data", and very long series are reduced per pixel
 //! column (keeping each column's minimum and maximum) so files stay small.
 //!
-//! ```no_run
-//! use std::path::Path;
+//! ```
 //! use fistage_plot::{Figure, Panel, Series, write_figure};
 //!
 //! let t: Vec<f64> = (0..1000).map(|i| i as f64 * 1e-3).collect();
@@ -17,9 +16,14 @@
 //!     "time [s]",
 //!     vec![Panel::new("table position [m]", vec![Series::line("table", t, x)])],
 //! );
-//! write_figure(&figure, Path::new("step.svg"))?;
+//! let file = std::env::temp_dir().join(format!("fistage-doc-step-{}.svg", std::process::id()));
+//! write_figure(&figure, &file)?;
+//! assert!(std::fs::read_to_string(&file).unwrap().contains("<svg"));
+//! # std::fs::remove_file(&file).ok();
 //! # Ok::<(), fistage_plot::PlotError>(())
 //! ```
+
+#![warn(missing_docs)]
 
 mod axis;
 mod bode;

@@ -1,7 +1,7 @@
 //! Stepping a model between communication points, as a co-simulation master
 //! asks for: the inputs an importer sets are held over each step (added to the
 //! scenario's own reference profile), the native engine integrates with error
-//! control in between through the one driver of [`crate::driver`], and the
+//! control in between through the one driver of driver (module `driver`), and the
 //! stepper can be checkpointed and resumed bit for bit.
 
 use fistage_model::{Inputs, Model, Reference, ReferenceSample, Workspace};

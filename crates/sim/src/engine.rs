@@ -2,7 +2,7 @@
 //! [`Trajectory`] sampled on a uniform grid. The native engine is the
 //! error-controlled Dormand-Prince 5(4) of [`crate::dopri`], the Rosenbrock
 //! engine the linearly implicit method of [`crate::rosenbrock`]; both step
-//! through the one driver of [`crate::driver`]. Which engine runs is an
+//! through the one driver of driver (module `driver`). Which engine runs is an
 //! [`EngineKind`], checked when the scenario is read.
 
 use std::time::Instant;
