@@ -12,6 +12,7 @@
 
 use std::fmt::Write as _;
 
+use fistage_model::LugreParams;
 use serde::{Deserialize, Serialize};
 
 use crate::frf::{FrfData, FrfFit, FrfResiduals};
@@ -418,19 +419,6 @@ fn sig(x: f64) -> String {
     }
 }
 
-/// An override key: bare if it can be, quoted otherwise.
-fn toml_key(name: &str) -> String {
-    let bare = !name.is_empty()
-        && name
-            .chars()
-            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
-    if bare {
-        name.to_string()
-    } else {
-        format!("\"{}\"", name.replace('\\', "\\\\").replace('"', "\\\""))
-    }
-}
-
 /// A TOML float that reads back exactly.
 fn toml_float(x: f64) -> String {
     format!("{x:?}")
@@ -531,15 +519,39 @@ pub fn frf_override(
     out
 }
 
+/// The `[overrides.<element>]` table, written by the TOML serializer (so no
+/// element name can break it). Each value passes the parameter table's rule
+/// for its LuGre key, or it is left out with a comment saying why.
 fn write_override(out: &mut String, element: &str, params: &[(&str, &ParamReport)]) {
     let _ = writeln!(out, "# 95% intervals (SI units):");
     for (name, p) in params {
         let _ = writeln!(out, "#   {name:<7} {} {}", interval(p.ci95), p.unit);
     }
-    let _ = writeln!(out, "[overrides.{}]", toml_key(element));
+    let mut values = toml::Table::new();
     for (name, p) in params {
-        let _ = writeln!(out, "{name} = {}", toml_float(p.value));
+        match LugreParams::key(name) {
+            Some(key) if key.rule.admits(p.value) => {
+                values.insert(key.name.to_string(), toml::Value::Float(p.value));
+            }
+            Some(key) => {
+                let _ = writeln!(
+                    out,
+                    "# {name} = {} is not written: it must be {}",
+                    p.value,
+                    key.rule.requirement()
+                );
+            }
+            None => {
+                let _ = writeln!(out, "# {name} is not a LuGre parameter; not written");
+            }
+        }
     }
+    let mut overrides = toml::Table::new();
+    overrides.insert(element.to_string(), toml::Value::Table(values));
+    let mut document = toml::Table::new();
+    document.insert("overrides".into(), toml::Value::Table(overrides));
+    // A table of tables of floats always serializes.
+    out.push_str(&toml::to_string(&document).unwrap_or_default());
 }
 
 /// The data with the fitted force at each point:
@@ -653,9 +665,24 @@ mod tests {
         assert_eq!(sig(-14.2), "-14.2000");
     }
 
+    /// Any element name, quoted where TOML needs it, reads back as itself;
+    /// a value its rule refuses is not written.
     #[test]
-    fn keys_are_quoted_when_needed() {
-        assert_eq!(toml_key("bearing_friction"), "bearing_friction");
-        assert_eq!(toml_key("bearing rl"), "\"bearing rl\"");
+    fn override_reads_back_for_any_element_name() {
+        let param = |value: f64| ParamReport {
+            value,
+            ci95: None,
+            std_error: None,
+            unit: "N".to_string(),
+        };
+        let (good, bad) = (param(5.1), param(-1.0));
+        for element in ["bearing_friction", "bearing rl", "a\"b", "x.y", "ü"] {
+            let mut out = String::new();
+            write_override(&mut out, element, &[("f_c", &good), ("f_s", &bad)]);
+            let table: toml::Table = out.parse().expect("valid TOML");
+            let values = &table["overrides"][element];
+            assert_eq!(values["f_c"].as_float(), Some(5.1), "{out}");
+            assert!(values.get("f_s").is_none(), "{out}");
+        }
     }
 }
