@@ -2,6 +2,7 @@
 //! heatmaps, and the grey used for missing values.
 
 use plotters::style::RGBColor;
+use plotters::style::colors::colormaps::{ColorMap, DerivedColorMap};
 
 /// Colour-blind-safe qualitative palette (Okabe and Ito), strongest colours first and the
 /// pale yellow last.
@@ -71,18 +72,11 @@ pub(crate) fn diverging(t: f64) -> RGBColor {
     interpolate(&DIVERGING, t)
 }
 
-/// Linear interpolation between equally spaced anchors.
+/// plotters' colour map through equally spaced anchors at `t` (clamped; a
+/// non-finite `t` gives the centre, which plotters would not accept).
 fn interpolate(anchors: &[RGBColor], t: f64) -> RGBColor {
-    let last = anchors.len().saturating_sub(1);
-    let t = if t.is_finite() {
-        t.clamp(0.0, 1.0)
-    } else {
-        0.5
-    };
-    let position = t * last as f64;
-    let below = (position.floor() as usize).min(last);
-    let above = (below + 1).min(last);
-    blend(anchors[below], anchors[above], position - below as f64)
+    let t = if t.is_finite() { t } else { 0.5 };
+    DerivedColorMap::new(anchors).get_color_normalized(t, 0.0, 1.0)
 }
 
 /// `a` moved towards `b` by `fraction` in `[0, 1]`.
