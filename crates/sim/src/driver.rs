@@ -5,7 +5,7 @@
 //! inputs' discontinuities (the integrator restarts at each), the step
 //! budget and the mapping of integrator failures to [`SimError`].
 
-use fistage_model::{Inputs, Model, Workspace};
+use fistage_model::{InputValues, Model, Workspace};
 
 use crate::dopri::{DormandPrince, OdeSystem, StepCounts, StepFailure, Tolerances};
 use crate::excitation::Excitation;
@@ -17,7 +17,7 @@ pub(crate) struct ModelSystem<'a> {
     model: &'a Model,
     excitation: &'a dyn Excitation,
     /// The inputs, when they do not depend on time.
-    constant_inputs: Option<Inputs>,
+    constant_inputs: Option<InputValues<f64>>,
     workspace: &'a mut Workspace,
 }
 
@@ -30,16 +30,18 @@ impl<'a> ModelSystem<'a> {
         Self {
             model,
             excitation,
-            constant_inputs: excitation.is_constant().then(|| excitation.inputs(0.0)),
+            constant_inputs: excitation
+                .is_constant()
+                .then(|| excitation.inputs(0.0).values()),
             workspace,
         }
     }
 
     #[inline]
-    fn inputs(&self, t: f64) -> Inputs {
+    fn inputs(&self, t: f64) -> InputValues<f64> {
         match &self.constant_inputs {
             Some(inputs) => *inputs,
-            None => self.excitation.inputs(t),
+            None => self.excitation.inputs(t).values(),
         }
     }
 }
@@ -52,13 +54,13 @@ impl OdeSystem for ModelSystem<'_> {
     #[inline]
     fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
         let inputs = self.inputs(t);
-        self.model.rhs(x, &inputs, dx, self.workspace);
+        self.model.rhs_of(x, &inputs, dx, self.workspace);
     }
 }
 
 impl JacobianSystem for ModelSystem<'_> {
     fn jacobian(&mut self, t: f64, x: &[f64]) -> nalgebra::DMatrix<f64> {
-        self.model.jacobian(x, &self.inputs(t))
+        self.model.jacobian(x, &self.excitation.inputs(t))
     }
 }
 
