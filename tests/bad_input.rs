@@ -210,3 +210,47 @@ fn unknown_output_signal_is_named_before_the_run() {
         ],
     );
 }
+
+/// Names become CSV headers, signal and FMI names: a comma, a quote or an
+/// empty name is refused, naming the element.
+#[test]
+fn unusable_names_are_named() {
+    for (from, to, element) in [
+        (
+            "name=\"bearing_friction\"",
+            "name=\"bearing,friction\"",
+            "friction \"bearing,friction\"",
+        ),
+        ("name=\"encoder\"", "name=\"\"", "sensor \"\""),
+        ("name=\"drive\"", "name=\"dr&quot;ive\"", "actuator"),
+    ] {
+        let xml = shipped_robot().replacen(from, to, 1);
+        let message = robot_error(&xml);
+        assert_mentions(&message, &["robots/bad.urdf", element, "unusable name"]);
+    }
+}
+
+/// The fistage prefix bound to another namespace is an error, not a file
+/// whose isolator and friction silently vanish.
+#[test]
+fn fistage_prefix_of_another_namespace_is_an_error() {
+    let xml = shipped_robot().replace(
+        "xmlns:fistage=\"urn:fistage:urdf:1\"",
+        "xmlns:fistage=\"urn:vendor:stage\"",
+    );
+    assert_mentions(&robot_error(&xml), &["robots/bad.urdf", "urn:vendor:stage"]);
+}
+
+/// A file nested 20 000 deep is refused before any parser recurses into it.
+#[test]
+fn deep_nesting_is_refused_before_parsing() {
+    let deep = format!(
+        "<robot name=\"x\">{}{}</robot>",
+        "<a>".repeat(20_000),
+        "</a>".repeat(20_000)
+    );
+    assert_mentions(
+        &robot_error(&deep),
+        &["robots/bad.urdf", "nested more than"],
+    );
+}

@@ -229,6 +229,10 @@ impl RobotSpec {
 
     /// Reads and checks robot XML; `file` is used in messages and nothing else.
     pub fn from_str(text: &str, file: &Path) -> Result<Self, LoadError> {
+        check_nesting(text).map_err(|message| LoadError::Syntax {
+            file: file.to_path_buf(),
+            message,
+        })?;
         let document = roxmltree::Document::parse(text).map_err(|e| LoadError::Syntax {
             file: file.to_path_buf(),
             message: format!("malformed XML: {e}"),
@@ -264,6 +268,23 @@ impl RobotSpec {
     /// Element names must be unique and must not shadow link names, so that a
     /// scenario override by name is never ambiguous.
     fn check_names(&self) -> Result<(), LoadError> {
+        let every_name = (self.links.iter().map(|l| ("link", &l.name)))
+            .chain(self.joints.iter().map(|j| ("joint", &j.name)))
+            .chain(self.isolators.iter().map(|e| ("isolator", &e.name)))
+            .chain(self.frictions.iter().map(|e| ("friction", &e.name)))
+            .chain(self.actuators.iter().map(|e| ("actuator", &e.name)))
+            .chain(self.sensors.iter().map(|e| ("sensor", &e.name)));
+        for (kind, name) in every_name {
+            if let Err(why) = check_name(name) {
+                return Err(LoadError::robot(
+                    &self.file,
+                    format!("{kind} {name:?}"),
+                    format!(
+                        "unusable name: {why} (names become CSV headers, signal and FMI variable names)"
+                    ),
+                ));
+            }
+        }
         let mut links = HashSet::new();
         for link in &self.links {
             if !links.insert(link.name.as_str()) {
@@ -311,6 +332,77 @@ impl RobotSpec {
         }
         Ok(())
     }
+}
+
+/// The deepest element nesting a robot file may have (URDF needs about 5).
+const MAX_NESTING: usize = 64;
+
+/// Refuses a file nested deeper than [`MAX_NESTING`] before any parser sees
+/// it (recursive parsers would exhaust the stack on a very deep file).
+/// Comments, processing instructions, CDATA and declarations do not nest.
+fn check_nesting(text: &str) -> Result<(), String> {
+    let bytes = text.as_bytes();
+    let (mut depth, mut i) = (0usize, 0usize);
+    let skip_to = |from: usize, end: &[u8]| {
+        (from..bytes.len())
+            .find(|&k| bytes[k..].starts_with(end))
+            .map_or(bytes.len(), |k| k + end.len())
+    };
+    while i < bytes.len() {
+        match bytes[i] {
+            b'<' if bytes[i..].starts_with(b"<!--") => i = skip_to(i, b"-->"),
+            b'<' if bytes[i..].starts_with(b"<![CDATA[") => i = skip_to(i, b"]]>"),
+            b'<' if bytes[i..].starts_with(b"<?") => i = skip_to(i, b"?>"),
+            b'<' if bytes[i..].starts_with(b"<!") => i = skip_to(i, b">"),
+            b'<' if bytes[i..].starts_with(b"</") => {
+                depth = depth.saturating_sub(1);
+                i = skip_to(i, b">");
+            }
+            b'<' => {
+                let end = skip_to(i, b">");
+                let self_closing = end >= 2 && bytes[end - 2] == b'/';
+                if !self_closing {
+                    depth += 1;
+                    if depth > MAX_NESTING {
+                        let line = bytes[..i].iter().filter(|&&b| b == b'\n').count() + 1;
+                        return Err(format!(
+                            "line {line}: elements nested more than {MAX_NESTING} deep"
+                        ));
+                    }
+                }
+                i = end;
+            }
+            _ => i += 1,
+        }
+    }
+    Ok(())
+}
+
+/// The longest name a link, joint or element may have.
+const MAX_NAME_LENGTH: usize = 128;
+
+/// Characters that would break a CSV header (`name [unit]`), a parameter
+/// path or an FMI name.
+const FORBIDDEN_IN_NAMES: &[char] = &[',', ';', '"', '\'', '[', ']', '{', '}', '<', '>', '=', '\\'];
+
+/// Why a name cannot serve as a signal, CSV and FMI name, if it cannot.
+fn check_name(name: &str) -> Result<(), String> {
+    if name.is_empty() {
+        return Err("empty".into());
+    }
+    if name.chars().count() > MAX_NAME_LENGTH {
+        return Err(format!("longer than {MAX_NAME_LENGTH} characters"));
+    }
+    if name.trim() != name {
+        return Err("leading or trailing white space".into());
+    }
+    if let Some(c) = name
+        .chars()
+        .find(|c| c.is_control() || FORBIDDEN_IN_NAMES.contains(c))
+    {
+        return Err(format!("contains {c:?}"));
+    }
+    Ok(())
 }
 
 fn pose_to_isometry(pose: &urdf_rs::Pose) -> Isometry3<f64> {
@@ -471,7 +563,7 @@ impl ExtensionReader<'_> {
     /// whose namespace looks like a mistyped fistage one is an error.
     fn warn_foreign(&self, node: roxmltree::Node) -> Result<(), LoadError> {
         if let Some(ns) = node.tag_name().namespace()
-            && ns.contains("fistage")
+            && (ns.contains("fistage") || node.lookup_prefix(ns) == Some("fistage"))
         {
             return Err(LoadError::robot(
                 self.file,

@@ -527,6 +527,29 @@ impl Scenario {
                 ),
             ));
         }
+        let interval = 1.0 / sample_rate;
+        let samples = (raw.duration / interval).floor() + 1.0;
+        if samples > MAX_SAMPLES {
+            return Err(checker.error(
+                "output.sample_rate",
+                format!(
+                    "{sample_rate} Hz over {} s is {samples:.3e} samples; at most {MAX_SAMPLES:e}",
+                    raw.duration
+                ),
+            ));
+        }
+        // Samples sit at k / sample_rate: the window must hold at least one.
+        let in_window =
+            (window[1] / interval + 1e-9).floor() - (window[0] / interval - 1e-9).ceil() + 1.0;
+        if in_window < 1.0 {
+            return Err(checker.error(
+                "statistics.window",
+                format!(
+                    "[{}, {}] s holds no output sample at {sample_rate} Hz; widen it or raise output.sample_rate",
+                    window[0], window[1]
+                ),
+            ));
+        }
         let overrides = checker.overrides(raw.overrides)?;
         for (name, value) in &raw.initial {
             checker.finite(&format!("initial.{name}"), *value)?;
@@ -557,6 +580,9 @@ impl Scenario {
         LoadError::scenario(&self.file, key, message)
     }
 }
+
+/// The most output samples a run may hold (each is a full state vector).
+const MAX_SAMPLES: f64 = 2e7;
 
 /// 1 kHz for short runs, fewer samples for long ones (at most about 200 000).
 fn default_sample_rate(duration: f64) -> f64 {
