@@ -35,4 +35,4 @@ pub mod routh;
 pub mod sweep;
 
 pub use eigen::{EigenPair, eigen_decomposition};
-pub use modes::{AnalysisError, ModalAnalysis, Mode, Participation, modal_analysis};
+pub use modes::{AnalysisError, ModalAnalysis, Mode, Participation, Verdict, modal_analysis};

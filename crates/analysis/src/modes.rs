@@ -69,6 +69,94 @@ impl Mode {
     }
 }
 
+/// What the eigenvalues can back about an equilibrium.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// Every non-neutral eigenvalue lies in the open left half plane, by more
+    /// than the numerical error.
+    Stable,
+    /// Some eigenvalue lies in the right half plane by more than the error.
+    Unstable,
+    /// The decomposition failed a check, or the largest real part is within
+    /// its numerical error of zero.
+    Undetermined,
+}
+
+/// An eigenvalue smaller than this times the Jacobian's norm is neutral
+/// (zero within what the decomposition resolves).
+const NEUTRAL: f64 = RESOLVED;
+
+/// Below this times the Jacobian's norm an eigenvalue is zero to round-off;
+/// between it and [`NEUTRAL`] a growing one cannot be told from zero.
+const RESOLVED: f64 = 1e3 * f64::EPSILON;
+
+/// Largest relative eigen-residual `|J v - lambda v| / (|J| + |lambda|)` a
+/// pair may have and still be trusted.
+const RESIDUAL_LIMIT: f64 = 1e-6;
+
+/// The verdict the eigenvalues back, with the reason when none: the Jacobian
+/// and eigenvalues are finite, every pair's residual is small, the
+/// eigenvalues sum to the trace (an independent check of the whole set), and
+/// the largest real part is farther from zero than the error the residuals
+/// and the Jacobian's norm allow.
+fn verdict(
+    jacobian: &DMatrix<f64>,
+    pairs: &[crate::eigen::EigenPair],
+    modes: &[Mode],
+    max_real_part: f64,
+) -> (Verdict, Option<String>) {
+    let any_active = modes.iter().any(|m| !m.neutral);
+    let undetermined = |why: String| (Verdict::Undetermined, Some(why));
+    if jacobian.iter().any(|v| !v.is_finite()) {
+        return undetermined("the Jacobian has non-finite entries".into());
+    }
+    if pairs
+        .iter()
+        .any(|p| !(p.value.re.is_finite() && p.value.im.is_finite()))
+    {
+        return undetermined("the eigenvalue iteration did not converge".into());
+    }
+    let scale = jacobian.norm().max(f64::MIN_POSITIVE);
+    let n = jacobian.nrows().max(1) as f64;
+    let sum: f64 = pairs.iter().map(|p| p.value.re).sum();
+    let trace = jacobian.trace();
+    if (sum - trace).abs() > 1e-8 * n * scale {
+        return undetermined(format!(
+            "the eigenvalues sum to {sum:.6e}, the Jacobian's trace is {trace:.6e}"
+        ));
+    }
+    let worst = pairs.iter().map(|p| p.residual).fold(0.0, f64::max);
+    if worst.is_nan() || worst > RESIDUAL_LIMIT {
+        return undetermined(format!(
+            "an eigenpair's relative residual is {worst:.1e} (limit {RESIDUAL_LIMIT:.0e})"
+        ));
+    }
+    if !any_active {
+        return undetermined("every eigenvalue is neutral (zero within round-off)".into());
+    }
+    let error = RESOLVED.max(worst) * scale;
+    if max_real_part > error {
+        // A resolved growing mode: unstable whatever the unresolved ones do.
+        return (Verdict::Unstable, None);
+    }
+    if let Some(hidden) = modes
+        .iter()
+        .find(|m| m.neutral && m.real > 0.0 && m.real.hypot(m.imag) > RESOLVED * scale)
+    {
+        return undetermined(format!(
+            "a growing mode ({:.3e} {:+.3e}i 1/s) is too small to resolve against a Jacobian of norm {scale:.1e}",
+            hidden.real, hidden.imag
+        ));
+    }
+    if max_real_part.abs() <= error {
+        return undetermined(format!(
+            "the largest real part {max_real_part:.3e} 1/s is within the numerical error {error:.1e} 1/s of zero (Jacobian norm {scale:.1e})"
+        ));
+    }
+    (Verdict::Stable, None)
+}
+
 /// Everything the linearisation at one equilibrium says.
 #[derive(Debug, Clone, Serialize)]
 pub struct ModalAnalysis {
@@ -82,12 +170,18 @@ pub struct ModalAnalysis {
     pub modes: Vec<Mode>,
     /// Largest real part of the eigenvalues that are not neutral, 1/s.
     pub max_real_part: f64,
-    /// Number of neutral (zero) eigenvalues: |lambda| below 1e-8 of the
+    /// Number of neutral (zero) eigenvalues: |lambda| below 1e-10 of the
     /// Jacobian's norm. A stuck contact has one each, since its bristle
     /// deflection and its position then move together.
     pub neutral: usize,
-    /// Every eigenvalue that is not neutral lies in the open left half plane.
+    /// Every eigenvalue that is not neutral lies in the open left half plane,
+    /// and the eigen-decomposition passed its checks (see `verdict`).
     pub stable: bool,
+    /// `stable`, `unstable`, or `undetermined` when the numerics cannot back
+    /// either (see `undetermined_reason`).
+    pub verdict: Verdict,
+    /// Why the verdict is undetermined.
+    pub undetermined_reason: Option<String>,
     /// The tangent-coordinate Jacobian.
     #[serde(skip)]
     pub jacobian: DMatrix<f64>,
@@ -147,7 +241,8 @@ pub fn modal_analysis(
         .map(|k| *k == fistage_model::StateKind::Bristle)
         .collect();
     let mut modes = Vec::new();
-    for mut pair in eigen_decomposition(&jacobian) {
+    let pairs = eigen_decomposition(&jacobian);
+    for mut pair in pairs.iter().cloned() {
         // Repeated real roots can come out of the Schur form as a pair with
         // imaginary parts at round-off level: they are two real eigenvalues.
         if pair.value.im.abs() <= 1e-9 * pair.value.norm().max(1.0) {
@@ -214,14 +309,23 @@ pub fn modal_analysis(
     }
     let scale = jacobian.norm().max(1.0);
     for mode in &mut modes {
-        mode.neutral = (mode.real * mode.real + mode.imag * mode.imag).sqrt() < 1e-8 * scale;
+        mode.neutral = (mode.real * mode.real + mode.imag * mode.imag).sqrt() < NEUTRAL * scale;
     }
     let neutral = modes.iter().filter(|m| m.neutral).count();
+    let any_active = modes.iter().any(|m| !m.neutral);
+    // Over every mode when all are neutral, so the number is never infinite.
     let max_real_part = modes
         .iter()
-        .filter(|m| !m.neutral)
+        .filter(|m| !m.neutral || !any_active)
         .map(|m| m.real)
+        .filter(|r| r.is_finite())
         .fold(f64::NEG_INFINITY, f64::max);
+    let max_real_part = if max_real_part.is_finite() {
+        max_real_part
+    } else {
+        0.0
+    };
+    let (verdict, undetermined_reason) = verdict(&jacobian, &pairs, &modes, max_real_part);
     Ok(ModalAnalysis {
         equilibrium: match kind {
             EquilibriumKind::Sticking => "sticking".into(),
@@ -232,7 +336,9 @@ pub fn modal_analysis(
         modes,
         max_real_part,
         neutral,
-        stable: max_real_part < 0.0,
+        stable: verdict == Verdict::Stable,
+        verdict,
+        undetermined_reason,
         jacobian_coordinates: tangent.names.clone(),
         jacobian_rows: (0..jacobian.nrows())
             .map(|r| jacobian.row(r).iter().copied().collect())

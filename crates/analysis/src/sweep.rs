@@ -42,7 +42,7 @@ use fistage_sim::{
 use rayon::prelude::*;
 use serde::Deserialize;
 
-use crate::modes::modal_analysis;
+use crate::modes::{Verdict, modal_analysis};
 
 /// Grid spacing along an axis.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
@@ -287,8 +287,9 @@ pub fn variant(
     })
 }
 
-/// Linear verdict at the slipping equilibrium: (stable, largest real part).
-fn linear_verdict(loaded: &Loaded) -> Option<(bool, f64)> {
+/// Linear verdict at the slipping equilibrium: (stable, or `None` when the
+/// eigenvalues cannot back a verdict; largest real part).
+fn linear_verdict(loaded: &Loaded) -> Option<(Option<bool>, f64)> {
     let scenario = &loaded.scenario;
     let mut inputs = ScenarioExcitation::from_scenario(scenario).inputs(0.0);
     inputs.platform_velocity = scenario.platform_velocity - scenario.reference.traverse_velocity();
@@ -300,7 +301,12 @@ fn linear_verdict(loaded: &Loaded) -> Option<(bool, f64)> {
         &loaded.model.zero_state(),
     )
     .ok()?;
-    Some((analysis.stable, analysis.max_real_part))
+    let stable = match analysis.verdict {
+        Verdict::Stable => Some(true),
+        Verdict::Unstable => Some(false),
+        Verdict::Undetermined => None,
+    };
+    Some((stable, analysis.max_real_part))
 }
 
 /// Steady peak-to-peak of the controller's sensor over the last quarter of a
@@ -381,7 +387,7 @@ pub fn evaluate_point(
     if spec.analysis.linear()
         && let Some((stable, max_real)) = linear_verdict(&loaded)
     {
-        result.stable_linear = Some(stable);
+        result.stable_linear = stable;
         result.max_real_eig = Some(max_real);
     }
     if spec.analysis.simulation()
