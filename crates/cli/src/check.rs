@@ -1,5 +1,6 @@
-//! `fistage check SCENARIO`: load and validate a scenario and its robot without
-//! simulating, and print what was assembled: bodies, joints, elements, the
+//! `fistage check SCENARIO`: load and validate a scenario and its robot
+//! without simulating (everything `fistage run` checks before it integrates:
+//! signal names, colliders, the start state), and print what was assembled: bodies, joints, elements, the
 //! evaluation path, the state layout and the output signals.
 
 use std::path::PathBuf;
@@ -16,6 +17,7 @@ pub struct CheckArgs {
 /// Runs the command.
 pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     let loaded = fistage_model::load(&args.scenario)?;
+    fistage_sim::validate(&loaded)?;
     let model = &loaded.model;
     println!("{}: ok", args.scenario.display());
     println!(

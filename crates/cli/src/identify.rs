@@ -40,6 +40,8 @@ use fistage_ident::{
 };
 use fistage_plot::{BodeSeries, Series, SeriesStyle, XyPlot, write_bode, write_xy};
 
+use crate::output::OutputFolder;
+
 /// Arguments of `fistage identify`.
 #[derive(Args)]
 pub struct IdentifyArgs {
@@ -126,6 +128,9 @@ struct OutputArgs {
     /// Friction element that override.toml applies to.
     #[arg(long, value_name = "NAME", default_value = DEFAULT_ELEMENT)]
     element: String,
+    /// Replace an earlier result in the --out folder (as a whole).
+    #[arg(long)]
+    force: bool,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -352,7 +357,9 @@ fn run_stribeck(args: &StribeckArgs) -> Result<()> {
     };
     let report = StribeckReport::new(&source, &fit, asymmetric.as_ref());
     let json = serde_json::to_string_pretty(&report)?;
-    if let Some(dir) = &args.output.out {
+    if let Some(target) = &args.output.out {
+        let folder = OutputFolder::begin(target, args.output.force)?;
+        let dir = folder.path();
         write_outputs(
             dir,
             &json,
@@ -363,6 +370,7 @@ fn run_stribeck(args: &StribeckArgs) -> Result<()> {
         write_plot(dir, |path| {
             write_xy(&stribeck_plot(&data, &fit, asymmetric.as_ref()), path)
         })?;
+        folder.commit()?;
     }
     print_report(args.output.json, &json, &report.table());
     Ok(())
@@ -393,7 +401,9 @@ fn run_frf(args: &FrfArgs) -> Result<()> {
     let fit = fit_frf(&data, &options)?;
     let report = FrfReport::new(&data.source, &fit);
     let json = serde_json::to_string_pretty(&report)?;
-    if let Some(dir) = &args.output.out {
+    if let Some(target) = &args.output.out {
+        let folder = OutputFolder::begin(target, args.output.force)?;
+        let dir = folder.path();
         write_outputs(
             dir,
             &json,
@@ -403,6 +413,7 @@ fn run_frf(args: &FrfArgs) -> Result<()> {
         )?;
         let (title, freq_hz, series) = frf_bode(&data, &fit);
         write_plot(dir, |path| write_bode(&title, &freq_hz, &series, path))?;
+        folder.commit()?;
     }
     print_report(args.output.json, &json, &report.table());
     Ok(())
@@ -480,7 +491,7 @@ fn read_stribeck_report(path: &Path) -> Result<StribeckReport> {
     Ok(report)
 }
 
-/// Writes the result files into `dir` (created if needed).
+/// Writes the result files into `dir` (a staging folder of [`OutputFolder`]).
 fn write_outputs(
     dir: &Path,
     json: &str,

@@ -12,6 +12,7 @@ mod fmu;
 mod identify;
 mod lyapunov;
 mod modes;
+mod output;
 mod progress;
 mod run;
 mod sweep;
@@ -50,6 +51,13 @@ enum Command {
 }
 
 fn main() -> anyhow::Result<()> {
+    // Written into a pipe that closes early (`fistage check x.toml | head -1`),
+    // end quietly as other Unix programs do instead of panicking on EPIPE.
+    // SAFETY: restoring the default disposition of SIGPIPE before any thread
+    // starts touches no Rust state.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     match cli.command {
         Command::Run(args) => run::run(&args),

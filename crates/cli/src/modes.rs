@@ -5,11 +5,13 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use fistage_analysis::{ModalAnalysis, Mode, modal_analysis};
+use fistage_analysis::{ModalAnalysis, Mode, Verdict, modal_analysis};
 use fistage_model::{EquilibriumKind, Frame, JointMotion, Loaded};
 use fistage_plot::{Series, XyPlot, write_xy};
 use fistage_sim::{Excitation, ScenarioExcitation, initial_state};
 use nalgebra::Vector3;
+
+use crate::output::OutputFolder;
 
 /// Which equilibria to analyse.
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -39,6 +41,9 @@ pub struct ModesArgs {
     /// How many dominant mode shapes to draw per equilibrium.
     #[arg(long, default_value_t = 4)]
     pub shapes: usize,
+    /// Replace an earlier result in the output folder (as a whole).
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Runs the command.
@@ -69,25 +74,26 @@ pub fn run(args: &ModesArgs) -> anyhow::Result<()> {
             .map_or("modes".into(), |s| s.to_string_lossy().into_owned());
         PathBuf::from("out").join(format!("{stem}-modes"))
     });
-    std::fs::create_dir_all(&out_dir)
-        .with_context(|| format!("cannot create {}", out_dir.display()))?;
+    let folder = OutputFolder::begin(&out_dir, args.force)?;
+    let staging = folder.path();
     let json = serde_json::json!({
         "scenario": scenario.file.display().to_string(),
         "slip_velocity_m_per_s": -inputs.platform_velocity,
         "analyses": analyses,
     });
     let text = serde_json::to_string_pretty(&json)?;
-    std::fs::write(out_dir.join("modes.json"), text.clone() + "\n")
-        .with_context(|| format!("cannot write {}", out_dir.join("modes.json").display()))?;
+    std::fs::write(staging.join("modes.json"), text.clone() + "\n")
+        .with_context(|| format!("cannot write {}", staging.join("modes.json").display()))?;
     let mut pictures = Vec::new();
     for analysis in &analyses {
         pictures.extend(draw_dominant_shapes(
             &loaded,
             analysis,
             args.shapes,
-            &out_dir,
+            staging,
         )?);
     }
+    let out_dir = folder.commit()?;
     if args.json {
         println!("{text}");
     } else {
@@ -99,6 +105,14 @@ pub fn run(args: &ModesArgs) -> anyhow::Result<()> {
             "wrote modes.json and {} pictures in {}",
             pictures.len(),
             out_dir.display()
+        );
+    }
+    if let Some(undetermined) = analyses.iter().find(|a| a.verdict == Verdict::Undetermined) {
+        anyhow::bail!(
+            "{}: the {} equilibrium's stability is undetermined: {}",
+            args.scenario.display(),
+            undetermined.equilibrium,
+            undetermined.undetermined_reason.as_deref().unwrap_or("")
         );
     }
     Ok(())
@@ -114,16 +128,17 @@ fn share_of(mode: &Mode, select: impl Fn(&str) -> bool) -> f64 {
 }
 
 fn print_table(analysis: &ModalAnalysis) {
+    let verdict = match analysis.verdict {
+        Verdict::Stable => "stable".to_string(),
+        Verdict::Unstable => "UNSTABLE".to_string(),
+        Verdict::Undetermined => format!(
+            "UNDETERMINED: {}",
+            analysis.undetermined_reason.as_deref().unwrap_or("")
+        ),
+    };
     println!(
-        "{} equilibrium: {} (largest real part {:.4e} 1/s, {} neutral)",
-        analysis.equilibrium,
-        if analysis.stable {
-            "stable"
-        } else {
-            "UNSTABLE"
-        },
-        analysis.max_real_part,
-        analysis.neutral
+        "{} equilibrium: {verdict} (largest real part {:.4e} 1/s, {} neutral)",
+        analysis.equilibrium, analysis.max_real_part, analysis.neutral
     );
     let floating: Vec<&str> = analysis
         .coordinates

@@ -9,6 +9,7 @@ use anyhow::Context;
 use fistage_model::EngineKind;
 use fistage_sim::{RunOutput, SignalSummary};
 
+use crate::output::OutputFolder;
 use crate::{figures, progress};
 
 /// Arguments of `fistage run`.
@@ -31,6 +32,9 @@ pub struct RunArgs {
     /// Fixed step of the rapier engine, s (instead of `rapier.dt`).
     #[arg(long)]
     pub dt: Option<f64>,
+    /// Replace an earlier result in the output folder (as a whole).
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Runs the command.
@@ -57,17 +61,18 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| default_out_dir(&args.scenario));
+    let folder = OutputFolder::begin(&out_dir, args.force)?;
     let bar = progress::bar(&format!("run {}", args.scenario.display()));
     let output = fistage_sim::run_scenario(&loaded, &mut |f| progress::set_fraction(&bar, f))?;
     bar.finish_and_clear();
-    std::fs::create_dir_all(&out_dir)
-        .with_context(|| format!("cannot create output folder {}", out_dir.display()))?;
-    write_csv(&output, &out_dir.join("trajectory.csv"))?;
-    write_summary(&loaded, &output, &out_dir.join("summary.json"))?;
+    let staging = folder.path();
+    write_csv(&output, &staging.join("trajectory.csv"))?;
+    write_summary(&loaded, &output, &staging.join("summary.json"))?;
     let mut written = vec!["trajectory.csv".to_string(), "summary.json".to_string()];
     if !args.no_plots {
-        written.extend(figures::run_figures(&loaded, &output, &out_dir)?);
+        written.extend(figures::run_figures(&loaded, &output, staging)?);
     }
+    let out_dir = folder.commit()?;
     print_summary(&loaded, &output);
     println!("wrote {} in {}", written.join(", "), out_dir.display());
     Ok(())

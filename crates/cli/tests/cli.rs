@@ -278,3 +278,130 @@ fn fmu_packages_a_scenario() {
     assert!(String::from_utf8_lossy(&bad.stderr).contains("absent.toml"));
     assert!(!out.join("other.fmu").exists(), "nothing written on error");
 }
+
+/// An output folder holds one complete result: a second run into it is
+/// refused without --force (and changes nothing), and with --force the new
+/// result replaces the old one whole (no plots of the first run beside the
+/// CSV of a --no-plots run).
+#[test]
+fn a_run_refuses_an_earlier_result_and_replaces_it_whole_when_forced() {
+    let out = scratch("replace");
+    let run = |extra: &[&str]| {
+        fistage()
+            .arg("run")
+            .arg(repository().join("scenarios/paper/fig05b_rigid.toml"))
+            .arg("--out")
+            .arg(&out)
+            .args(extra)
+            .output()
+            .expect("fistage runs")
+    };
+    assert!(run(&[]).status.success());
+    let before = std::fs::read(out.join("trajectory.csv")).expect("csv");
+    let refused = run(&["--no-plots"]);
+    assert!(!refused.status.success());
+    assert!(
+        String::from_utf8_lossy(&refused.stderr).contains("--force"),
+        "{}",
+        String::from_utf8_lossy(&refused.stderr)
+    );
+    assert_eq!(
+        std::fs::read(out.join("trajectory.csv")).expect("csv"),
+        before
+    );
+    assert!(out.join("response.svg").is_file());
+    assert!(run(&["--no-plots", "--force"]).status.success());
+    assert!(out.join("trajectory.csv").is_file());
+    assert!(
+        !out.join("response.svg").exists(),
+        "a plot of the earlier run stayed"
+    );
+}
+
+/// `fistage check` refuses what `fistage run` would refuse, naming the key.
+#[test]
+fn check_refuses_what_run_refuses() {
+    let dir = scratch("check");
+    std::fs::create_dir_all(&dir).expect("scratch");
+    let robot = repository().join("robots/stage_1dof_fi.urdf");
+    let base = format!(
+        "robot = {:?}\nduration = 1.0\n[controller]\nsensor = \"encoder\"\nactuator = \"drive\"\nk = 6e4\nc = 100.0\n",
+        robot.display().to_string()
+    );
+    let cases: [(&str, &str); 7] = [
+        ("engine = \"warp\"\n", "warp"),
+        ("[output]\nsignals = [\"encoder.nope\"]\n", "output.signals"),
+        ("[initial]\n\"nope.q\" = 1e-3\n", "initial.nope.q"),
+        (
+            "[solver]\nengine = \"rapier\"\n[[rapier.stop]]\njoint = \"nope\"\nupper = 1e-3\n",
+            "rapier.stop[0].joint",
+        ),
+        (
+            "[[rapier.stop]]\njoint = \"table_x\"\nupper = 1e-3\n",
+            "rapier.stop",
+        ),
+        (
+            "[output]\nsample_rate = 10.0\n[statistics]\nwindow = [0.51, 0.59]\n",
+            "statistics.window",
+        ),
+        ("[output]\nsample_rate = 1e9\n", "output.sample_rate"),
+    ];
+    for (k, (extra, key)) in cases.iter().enumerate() {
+        let file = dir.join(format!("case{k}.toml"));
+        // Top-level keys go before the first table.
+        let text = if extra.starts_with('[') {
+            format!("{base}{extra}")
+        } else {
+            format!("{extra}{base}")
+        };
+        std::fs::write(&file, text).expect("write");
+        let output = fistage().arg("check").arg(&file).output().expect("runs");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(!output.status.success(), "case {k} passed check");
+        assert!(stderr.contains(key), "case {k}: {stderr}");
+    }
+}
+
+/// `fistage modes` writes its result but exits non-zero when a verdict is
+/// undetermined, and says why; modes.json holds no non-finite number.
+#[test]
+fn modes_exits_non_zero_on_an_undetermined_verdict() {
+    let dir = scratch("modes-undetermined");
+    std::fs::create_dir_all(&dir).expect("scratch");
+    let robot = repository().join("robots/stage_1dof_fi.urdf");
+    let file = dir.join("tiny_bearing.toml");
+    std::fs::write(
+        &file,
+        format!(
+            "robot = {:?}\nduration = 1.0\n[platform]\nvelocity = 0.02\n[controller]\nsensor = \"encoder\"\nactuator = \"drive\"\nk = 6e4\nc = 100.0\n[overrides.bearing]\nmass = 1e-9\n",
+            robot.display().to_string()
+        ),
+    )
+    .expect("write");
+    let out = dir.join("out");
+    let output = fistage()
+        .arg("modes")
+        .arg(&file)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success(), "{stderr}");
+    assert!(stderr.contains("undetermined"), "{stderr}");
+    let json = std::fs::read_to_string(out.join("modes.json")).expect("modes.json");
+    assert!(json.contains("\"undetermined\""), "{json}");
+    // serde_json writes a non-finite number as null: the only nulls allowed
+    // are reasons that are absent.
+    fn nulls(value: &serde_json::Value, key: &str, found: &mut Vec<String>) {
+        match value {
+            serde_json::Value::Null if key != "undetermined_reason" => found.push(key.into()),
+            serde_json::Value::Array(items) => items.iter().for_each(|v| nulls(v, key, found)),
+            serde_json::Value::Object(map) => map.iter().for_each(|(k, v)| nulls(v, k, found)),
+            _ => {}
+        }
+    }
+    let mut found = Vec::new();
+    nulls(&serde_json::from_str(&json).expect("JSON"), "", &mut found);
+    assert!(found.is_empty(), "non-finite numbers under {found:?}");
+}

@@ -197,6 +197,47 @@ fn joint_of(model: &Model, index: usize) -> Option<GenericJoint> {
     )
 }
 
+/// The body and axis of the prismatic joint that `rapier.stop[i]` names.
+fn stop_joint(
+    model: &Model,
+    i: usize,
+    joint: &str,
+) -> Result<(usize, nalgebra::Vector3<f64>), SimError> {
+    let key = format!("rapier.stop[{i}].joint");
+    let index = (model.bodies().iter())
+        .position(|b| b.joint.name == joint)
+        .ok_or_else(|| SimError::InvalidSettings(format!("{key}: no joint named \"{joint}\"")))?;
+    match model.bodies()[index].joint.motion {
+        JointMotion::Prismatic { axis } => Ok((index, axis)),
+        _ => Err(SimError::InvalidSettings(format!(
+            "{key}: \"{joint}\" is not a prismatic joint"
+        ))),
+    }
+}
+
+/// The body that carries the payload's link.
+fn payload_body(model: &Model, link: &str) -> Result<usize, SimError> {
+    (model.bodies().iter())
+        .position(|b| b.name == link || b.links.iter().any(|l| l == link))
+        .ok_or_else(|| {
+            SimError::InvalidSettings(format!(
+                "rapier.payload.link: no body or link named \"{link}\""
+            ))
+        })
+}
+
+/// Checks that every collider of the settings names a joint or link of the
+/// model, as the engine would find out only when it builds its world.
+pub fn check_colliders(model: &Model, settings: &RapierSettings) -> Result<(), SimError> {
+    for (i, stop) in settings.stops.iter().enumerate() {
+        stop_joint(model, i, &stop.joint)?;
+    }
+    if let Some(payload) = &settings.payload {
+        payload_body(model, &payload.link)?;
+    }
+    Ok(())
+}
+
 fn stop_colliders(
     model: &Model,
     settings: &RapierSettings,
@@ -204,21 +245,8 @@ fn stop_colliders(
     ground: RigidBodyHandle,
 ) -> Result<(), SimError> {
     for (i, stop) in settings.stops.iter().enumerate() {
-        let key = format!("rapier.stop[{i}].joint");
-        let index = model
-            .bodies()
-            .iter()
-            .position(|b| b.joint.name == stop.joint)
-            .ok_or_else(|| {
-                SimError::InvalidSettings(format!("{key}: no joint named \"{}\"", stop.joint))
-            })?;
+        let (index, axis) = stop_joint(model, i, &stop.joint)?;
         let body = &model.bodies()[index];
-        let JointMotion::Prismatic { axis } = body.joint.motion else {
-            return Err(SimError::InvalidSettings(format!(
-                "{key}: \"{}\" is not a prismatic joint",
-                stop.joint
-            )));
-        };
         let group = Group::from_bits_truncate(1 << (i % 31));
         let groups = InteractionGroups::new(group, group, InteractionTestMode::And);
         let ball = || {
@@ -257,16 +285,7 @@ fn add_payload(
     motions: &[BodyMotion],
     world: &mut World,
 ) -> Result<(), SimError> {
-    let link = model
-        .bodies()
-        .iter()
-        .position(|b| b.name == payload.link || b.links.contains(&payload.link))
-        .ok_or_else(|| {
-            SimError::InvalidSettings(format!(
-                "rapier.payload.link: no body or link named \"{}\"",
-                payload.link
-            ))
-        })?;
+    let link = payload_body(model, &payload.link)?;
     let [a, b, c] = payload.size;
     let start_in_link = Vector3::from(payload.position);
     let motion = &motions[link];
@@ -571,11 +590,12 @@ impl Engine for RapierEngine {
             settings.sample_interval,
         );
         let times = sample_times(settings.t_end, settings.sample_interval);
-        let total_steps = ((settings.t_end / dt).ceil() as u64).max(1);
-        if total_steps > settings.max_steps {
-            return Err(SimError::TooManySteps {
-                t: 0.0,
-                steps: total_steps,
+        let needed = (settings.t_end / dt).ceil().max(1.0);
+        if needed.is_nan() || needed > settings.max_steps as f64 {
+            return Err(SimError::FixedStepBudget {
+                dt,
+                steps: needed,
+                max_steps: settings.max_steps,
             });
         }
         let mut world = build_world(model, x0, &self.settings, dt)?;

@@ -102,33 +102,51 @@ fn check_signal_names(model: &Model, scenario: &Scenario) -> Result<(), LoadErro
     ))
 }
 
-/// Runs a loaded scenario with the engine it names.
-pub fn run_scenario(loaded: &Loaded, progress: &mut dyn FnMut(f64)) -> Result<RunOutput, RunError> {
+/// Everything a run checks before it integrates, so that `fistage check`
+/// refuses exactly what `fistage run` would: output signal names, colliders
+/// only with the rapier engine and naming joints and links of the model, and
+/// the start state (equilibrium, `[initial]` names). Gives the start state.
+pub fn validate(loaded: &Loaded) -> Result<Vec<f64>, RunError> {
     let scenario = &loaded.scenario;
     let model = &loaded.model;
-    let engine = engine_for(scenario);
     check_signal_names(model, scenario)?;
-    if engine.kind() != EngineKind::Rapier {
-        let colliders = if !scenario.rapier.stops.is_empty() {
-            Some("rapier.stop")
-        } else if scenario.rapier.payload.is_some() {
-            Some("rapier.payload")
-        } else {
-            None
-        };
-        if let Some(key) = colliders {
+    let colliders = if !scenario.rapier.stops.is_empty() {
+        Some("rapier.stop")
+    } else if scenario.rapier.payload.is_some() {
+        Some("rapier.payload")
+    } else {
+        None
+    };
+    match (scenario.solver.engine, colliders) {
+        (EngineKind::Rapier, _) => {
+            crate::rapier_engine::check_colliders(model, &scenario.rapier).map_err(|source| {
+                RunError::Simulation {
+                    file: scenario.file.display().to_string(),
+                    source,
+                }
+            })?;
+        }
+        (engine, Some(key)) => {
             return Err(scenario
                 .error(
                     key,
                     format!(
-                        "colliders need engine = \"rapier\"; the {} engine has no contacts",
-                        engine.name()
+                        "colliders need engine = \"rapier\"; the {engine} engine has no contacts"
                     ),
                 )
                 .into());
         }
+        (_, None) => {}
     }
-    let x0 = initial_state(model, scenario)?;
+    Ok(initial_state(model, scenario)?)
+}
+
+/// Runs a loaded scenario with the engine it names.
+pub fn run_scenario(loaded: &Loaded, progress: &mut dyn FnMut(f64)) -> Result<RunOutput, RunError> {
+    let scenario = &loaded.scenario;
+    let model = &loaded.model;
+    let x0 = validate(loaded)?;
+    let engine = engine_for(scenario);
     let excitation = ScenarioExcitation::from_scenario(scenario);
     let settings = SimSettings::from_scenario(scenario);
     let trajectory = engine

@@ -59,6 +59,18 @@ pub enum SimError {
         /// Steps taken.
         steps: u64,
     },
+    /// A fixed-step engine would need more steps than the budget allows.
+    #[error(
+        "the fixed step dt = {dt:.3e} s needs {steps:.3e} steps, more than solver.max_steps = {max_steps} (raise rapier.dt or solver.max_steps, or shorten the run)"
+    )]
+    FixedStepBudget {
+        /// The step, s.
+        dt: f64,
+        /// Steps the run needs.
+        steps: f64,
+        /// The budget.
+        max_steps: u64,
+    },
     /// The initial state is not finite or has the wrong length.
     #[error("invalid initial state: {0}")]
     InvalidInitialState(String),

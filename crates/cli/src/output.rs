@@ -1,0 +1,155 @@
+//! Output folders written whole or not at all. A command writes into a fresh
+//! staging folder beside the target and moves it into place only when every
+//! file is written; a failed command leaves the target as it was (the staging
+//! folder is removed). A target that already holds files is an earlier
+//! result: it is refused unless the user says `--force`, and then it is
+//! replaced as a whole, so no file of the earlier result stays beside the new
+//! ones.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, bail};
+
+/// A result being written: files go into [`OutputFolder::path`] until
+/// [`OutputFolder::commit`] moves them into place.
+#[derive(Debug)]
+pub struct OutputFolder {
+    target: PathBuf,
+    staging: PathBuf,
+    committed: bool,
+}
+
+impl OutputFolder {
+    /// Starts a result for `target`. Refuses a target that is a file, or a
+    /// folder holding files, unless `force`.
+    pub fn begin(target: &Path, force: bool) -> anyhow::Result<Self> {
+        if target.is_file() {
+            bail!(
+                "{}: is a file, not an output folder; name a folder with --out",
+                target.display()
+            );
+        }
+        let holds_files =
+            std::fs::read_dir(target).is_ok_and(|mut entries| entries.next().is_some());
+        if holds_files && !force {
+            bail!(
+                "{}: holds an earlier result; give --force to replace it, or choose another folder with --out",
+                target.display()
+            );
+        }
+        let parent = match target.parent() {
+            Some(parent) if !parent.as_os_str().is_empty() => parent.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        std::fs::create_dir_all(&parent)
+            .with_context(|| format!("cannot create {}", parent.display()))?;
+        let name = target
+            .file_name()
+            .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+        let staging = parent.join(format!(".{name}.partial-{}", std::process::id()));
+        if staging.exists() {
+            std::fs::remove_dir_all(&staging)
+                .with_context(|| format!("cannot clear {}", staging.display()))?;
+        }
+        std::fs::create_dir(&staging)
+            .with_context(|| format!("cannot create {}", staging.display()))?;
+        Ok(Self {
+            target: target.to_path_buf(),
+            staging,
+            committed: false,
+        })
+    }
+
+    /// Where the files go while the result is written.
+    pub fn path(&self) -> &Path {
+        &self.staging
+    }
+
+    /// Moves the finished result into place, replacing an earlier one whole.
+    pub fn commit(mut self) -> anyhow::Result<PathBuf> {
+        let earlier = self.staging.with_extension("earlier");
+        if self.target.exists() {
+            std::fs::rename(&self.target, &earlier).with_context(|| {
+                format!("cannot move the earlier {} aside", self.target.display())
+            })?;
+        }
+        if let Err(e) = std::fs::rename(&self.staging, &self.target) {
+            // Put the earlier result back: nothing is lost.
+            if earlier.exists() {
+                let _ = std::fs::rename(&earlier, &self.target);
+            }
+            return Err(e)
+                .with_context(|| format!("cannot move the result into {}", self.target.display()));
+        }
+        self.committed = true;
+        if earlier.exists() {
+            std::fs::remove_dir_all(&earlier).with_context(|| {
+                format!("cannot remove the earlier result {}", earlier.display())
+            })?;
+        }
+        Ok(self.target.clone())
+    }
+}
+
+impl Drop for OutputFolder {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_dir_all(&self.staging);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("fistage-output-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("scratch");
+        dir
+    }
+
+    #[test]
+    fn a_result_replaces_an_earlier_one_whole_and_only_when_forced() {
+        let dir = scratch("replace");
+        let target = dir.join("out");
+        let first = OutputFolder::begin(&target, false).expect("new folder");
+        std::fs::write(first.path().join("a.csv"), "1").expect("write");
+        std::fs::write(first.path().join("plot.svg"), "<svg/>").expect("write");
+        first.commit().expect("commit");
+        assert!(
+            OutputFolder::begin(&target, false).is_err(),
+            "an earlier result is refused"
+        );
+        let second = OutputFolder::begin(&target, true).expect("forced");
+        std::fs::write(second.path().join("a.csv"), "2").expect("write");
+        second.commit().expect("commit");
+        assert_eq!(std::fs::read_to_string(target.join("a.csv")).unwrap(), "2");
+        assert!(
+            !target.join("plot.svg").exists(),
+            "no stale file from the earlier result"
+        );
+        let leftovers: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+        assert_eq!(leftovers.len(), 1, "no staging folder left behind");
+    }
+
+    #[test]
+    fn a_failed_result_leaves_the_earlier_one_untouched() {
+        let dir = scratch("failed");
+        let target = dir.join("out");
+        std::fs::create_dir_all(&target).expect("folder");
+        std::fs::write(target.join("keep.csv"), "old").expect("write");
+        {
+            let partial = OutputFolder::begin(&target, true).expect("forced");
+            std::fs::write(partial.path().join("keep.csv"), "half").expect("write");
+            // Dropped without commit: the command failed.
+        }
+        assert_eq!(
+            std::fs::read_to_string(target.join("keep.csv")).unwrap(),
+            "old"
+        );
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+    }
+}
