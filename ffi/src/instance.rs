@@ -162,9 +162,26 @@ impl std::fmt::Debug for Instance {
     }
 }
 
-/// Reads `scenario.toml` and the robot file it names from a resource folder.
+/// Reads `scenario.toml` and the robot file it names from a resource folder,
+/// and refuses a scenario the unit cannot honour: it steps with the native
+/// engine, which has no colliders.
 fn load_source(resources: &Path) -> Result<Source, LoadError> {
     let scenario = Scenario::from_file(&resources.join(crate::package::SCENARIO_FILE))?;
+    if scenario.solver.engine != fistage_model::EngineKind::Native {
+        return Err(scenario.error(
+            "solver.engine",
+            format!(
+                "an FMU steps with the native engine, not {}; set engine = \"native\" to export it",
+                scenario.solver.engine
+            ),
+        ));
+    }
+    if !scenario.rapier.stops.is_empty() || scenario.rapier.payload.is_some() {
+        return Err(scenario.error(
+            "rapier",
+            "an FMU has no colliders (end stops, payloads): they need the rapier engine",
+        ));
+    }
     let robot = RobotSpec::from_file(&scenario.robot)?;
     Ok(Source { scenario, robot })
 }
@@ -276,12 +293,9 @@ impl Instance {
                 "stopTime {stop} is before startTime {start_time}"
             )));
         }
-        if let Some(rtol) = tolerance
-            && !(rtol.is_finite() && rtol > 0.0 && rtol < 1.0)
-        {
-            return Err(CallError::InvalidArgument(format!(
-                "tolerance must be in (0, 1), got {rtol}"
-            )));
+        if let Some(rtol) = tolerance {
+            fistage_model::SolverSettings::check_rtol(rtol)
+                .map_err(|why| CallError::InvalidArgument(format!("tolerance {why}")))?;
         }
         self.start_time = start_time;
         self.stop_time = stop_time;

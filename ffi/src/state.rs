@@ -1,15 +1,18 @@
 //! The byte form of an FMU state (fmi2SerializeFMUstate): a magic tag, a
 //! format version and the unit's GUID, then the snapshot's numbers as
 //! little-endian IEEE 754 doubles, so a restored state is bit for bit the
-//! saved one. Anything that does not parse, or belongs to another unit, is
-//! refused with the reason.
+//! saved one, and last a CRC-32 of everything before it. Anything that does
+//! not parse, fails its checksum, or belongs to another unit, is refused
+//! with the reason.
 
 use fistage_sim::{Checkpoint, StepCounts};
 
 use crate::instance::{Phase, Snapshot};
 
 const MAGIC: &[u8; 8] = b"FISTAGE\0";
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
+/// Bytes of the trailing CRC-32.
+const CHECKSUM: usize = 4;
 
 struct Writer(Vec<u8>);
 
@@ -64,9 +67,6 @@ impl<'a> Reader<'a> {
     fn u8(&mut self) -> Result<u8, String> {
         Ok(self.take(1)?[0])
     }
-    fn u32(&mut self) -> Result<u32, String> {
-        Ok(u32::from_le_bytes(self.array()?))
-    }
     fn u64(&mut self) -> Result<u64, String> {
         Ok(u64::from_le_bytes(self.array()?))
     }
@@ -118,21 +118,40 @@ pub fn encode(guid: &str, snapshot: &Snapshot) -> Vec<u8> {
             w.slice(&c.x);
         }
     }
+    let checksum = crc32fast::hash(&w.0);
+    w.u32(checksum);
     w.0
 }
 
 /// A snapshot from bytes made by [`encode`] for the unit with this GUID.
 pub fn decode(guid: &str, bytes: &[u8]) -> Result<Snapshot, String> {
-    let mut r = Reader { bytes, at: 0 };
-    if r.take(MAGIC.len()).ok() != Some(MAGIC.as_slice()) {
+    if !bytes.starts_with(MAGIC) {
         return Err("not a fistage FMU state (bad magic bytes)".into());
     }
-    let version = r.u32()?;
-    if version != VERSION {
-        return Err(format!(
-            "FMU state format version {version}, this unit reads {VERSION}"
-        ));
+    let version_at = MAGIC.len();
+    let version = bytes
+        .get(version_at..version_at + 4)
+        .and_then(|b| b.try_into().ok())
+        .map(u32::from_le_bytes);
+    if version != Some(VERSION) {
+        return Err(match version {
+            Some(v) => format!("FMU state format version {v}, this unit reads {VERSION}"),
+            None => "FMU state is truncated (no format version)".into(),
+        });
     }
+    let Some(body_len) = bytes.len().checked_sub(CHECKSUM) else {
+        return Err("FMU state is truncated (no checksum)".into());
+    };
+    let (body, stored) = bytes.split_at(body_len);
+    let stored = u32::from_le_bytes(stored.try_into().map_err(|_| "FMU state is truncated")?);
+    if crc32fast::hash(body) != stored {
+        return Err("FMU state is corrupt: its checksum does not match its contents".into());
+    }
+    let bytes = body;
+    let mut r = Reader {
+        bytes,
+        at: version_at + 4,
+    };
     let n = r.length(1)?;
     let owner = r.take(n)?;
     if owner != guid.as_bytes() {
@@ -234,5 +253,21 @@ mod tests {
         let mut longer = bytes.clone();
         longer.push(0);
         assert!(decode("{guid}", &longer).is_err());
+    }
+
+    /// Every flipped bit, in the numbers as anywhere else, is refused.
+    #[test]
+    fn corrupted_states_are_refused() {
+        let bytes = encode("{guid}", &sample());
+        for i in 0..bytes.len() {
+            for bit in 0..8 {
+                let mut damaged = bytes.clone();
+                damaged[i] ^= 1 << bit;
+                assert!(
+                    decode("{guid}", &damaged).is_err(),
+                    "byte {i} bit {bit} flipped went through"
+                );
+            }
+        }
     }
 }

@@ -41,10 +41,8 @@ pub struct RunArgs {
 pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     let mut loaded = fistage_model::load(&args.scenario)?;
     if let Some(rtol) = args.rtol {
-        anyhow::ensure!(
-            rtol > 0.0 && rtol < 0.1,
-            "--rtol must be in (0, 0.1), got {rtol}"
-        );
+        fistage_model::SolverSettings::check_rtol(rtol)
+            .map_err(|why| anyhow::anyhow!("--rtol {why}"))?;
         loaded.scenario.solver.rtol = rtol;
     }
     if let Some(engine) = args.engine {

@@ -405,3 +405,25 @@ fn modes_exits_non_zero_on_an_undetermined_verdict() {
     nulls(&serde_json::from_str(&json).expect("JSON"), "", &mut found);
     assert!(found.is_empty(), "non-finite numbers under {found:?}");
 }
+
+/// `fistage fmu` refuses a scenario the FMU cannot honour (colliders, an
+/// engine other than the native one) instead of exporting something else.
+#[test]
+fn fmu_refuses_a_scenario_it_cannot_honour() {
+    let dir = scratch("fmu-refuses");
+    std::fs::create_dir_all(&dir).expect("scratch");
+    let output = fistage()
+        .arg("fmu")
+        .arg(repository().join("scenarios/rapier/stop_crash.toml"))
+        .arg("-o")
+        .arg(dir.join("stop.fmu"))
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("solver.engine") || stderr.contains("rapier"),
+        "{stderr}"
+    );
+    assert!(!dir.join("stop.fmu").exists());
+}

@@ -313,6 +313,18 @@ fn default_max_steps() -> u64 {
     20_000_000
 }
 
+impl SolverSettings {
+    /// The relative tolerances every engine accepts: finite, `0 < rtol < 0.1`
+    /// (the rule for `solver.rtol`, `--rtol` and an FMU importer's tolerance).
+    pub fn check_rtol(rtol: f64) -> Result<(), String> {
+        if rtol.is_finite() && rtol > 0.0 && rtol < 0.1 {
+            Ok(())
+        } else {
+            Err(format!("must be > 0 and < 0.1, got {rtol}"))
+        }
+    }
+}
+
 impl Default for SolverSettings {
     fn default() -> Self {
         Self {
@@ -486,10 +498,8 @@ impl Scenario {
             }
         }
         let reference = checker.reference(raw.reference, base)?;
-        checker.positive("solver.rtol", raw.solver.rtol)?;
-        if raw.solver.rtol >= 0.1 {
-            return Err(checker.error("solver.rtol", "must be < 0.1"));
-        }
+        SolverSettings::check_rtol(raw.solver.rtol)
+            .map_err(|message| checker.error("solver.rtol", message))?;
         checker.positive("solver.atol_scale", raw.solver.atol_scale)?;
         if let Some(h) = raw.solver.max_step {
             checker.positive("solver.max_step", h)?;
