@@ -14,6 +14,7 @@ mod lyapunov;
 mod modes;
 mod output;
 mod progress;
+mod provenance;
 mod run;
 mod sweep;
 

@@ -19,6 +19,7 @@ use fistage_model::RobotSpec;
 use fistage_plot::{ColourScale, Heatmap, Series, XyPlot, write_heatmap, write_xy};
 
 use crate::progress;
+use crate::provenance::Provenance;
 
 /// Arguments of `fistage sweep`.
 #[derive(clap::Args)]
@@ -69,23 +70,35 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
         PathBuf::from("out").join(format!("{stem}-sweep"))
     });
     let shard = args.shard.as_deref().map(parse_shard).transpose()?;
+    let provenance = Provenance::of_sweep(
+        &loaded.scenario.file,
+        &loaded.scenario.robot,
+        &format!("{:?}", spec.axes),
+        &format!(
+            "{:?}, duration {:?}, oscillation threshold {:?}",
+            spec.analysis, spec.duration, spec.oscillation_threshold
+        ),
+        shard,
+    )?;
     let results = if args.merge.is_empty() {
-        compute(args, &loaded, &robot_file, &spec, shard, &out_dir)?
+        compute(
+            args,
+            &loaded,
+            &robot_file,
+            &spec,
+            shard,
+            &out_dir,
+            &provenance,
+        )?
     } else {
-        let mut all: Vec<PointResult> = Vec::new();
-        for dir in &args.merge {
-            let rows = read_rows(&dir.join("points.csv"), &spec);
-            anyhow::ensure!(
-                !rows.is_empty(),
-                "{}: no points of this sweep",
-                dir.join("points.csv").display()
-            );
-            all.extend(rows);
-        }
-        all.sort_by_key(|r| r.index);
-        all.dedup_by_key(|r| r.index);
+        let all = merge(&args.merge, &spec, &provenance)?;
         std::fs::create_dir_all(&out_dir)
             .with_context(|| format!("cannot create {}", out_dir.display()))?;
+        Provenance {
+            shard: "merged".into(),
+            ..provenance
+        }
+        .write(&out_dir)?;
         all
     };
     write_points(&spec, &results, &out_dir)?;
@@ -116,6 +129,66 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The points of shard folders made by this very sweep: each must carry the
+/// same provenance, no shard may come twice, all must split the grid alike,
+/// and no row may hold a non-finite number.
+fn merge(
+    folders: &[PathBuf],
+    spec: &SweepSpec,
+    provenance: &Provenance,
+) -> anyhow::Result<Vec<PointResult>> {
+    let mut all: Vec<PointResult> = Vec::new();
+    let mut shards: Vec<String> = Vec::new();
+    for dir in folders {
+        let theirs = provenance.check_folder(dir, "merge only shards of this sweep")?;
+        if shards.contains(&theirs.shard) {
+            bail!("{}: shard {} is given twice", dir.display(), theirs.shard);
+        }
+        let split = |s: &str| s.split_once('/').map(|(_, n)| n.to_string());
+        if let (Some(first), Some(this)) = (shards.first(), Some(&theirs.shard))
+            && split(first) != split(this)
+        {
+            bail!(
+                "{}: shard {} splits the grid otherwise than shard {first}",
+                dir.display(),
+                this
+            );
+        }
+        shards.push(theirs.shard.clone());
+        let points = dir.join("points.csv");
+        refuse_non_finite_rows(&points)?;
+        let rows = read_rows(&points, spec);
+        anyhow::ensure!(
+            !rows.is_empty(),
+            "{}: no points of this sweep",
+            points.display()
+        );
+        all.extend(rows);
+    }
+    all.sort_by_key(|r| r.index);
+    all.dedup_by_key(|r| r.index);
+    Ok(all)
+}
+
+/// A row with a NaN or infinite cell is damaged work: refuse it, naming it.
+fn refuse_non_finite_rows(points: &Path) -> anyhow::Result<()> {
+    let text = std::fs::read_to_string(points)
+        .with_context(|| format!("cannot read {}", points.display()))?;
+    for (line, row) in text.lines().enumerate().skip(1) {
+        if row
+            .split(',')
+            .any(|cell| cell.parse::<f64>().is_ok_and(|v| !v.is_finite()))
+        {
+            bail!(
+                "{}: line {}: a non-finite number ({row}); not merged",
+                points.display(),
+                line + 1
+            );
+        }
+    }
+    Ok(())
+}
+
 fn compute(
     args: &SweepArgs,
     loaded: &fistage_model::Loaded,
@@ -123,6 +196,7 @@ fn compute(
     spec: &SweepSpec,
     shard: Option<(usize, usize)>,
     out_dir: &Path,
+    provenance: &Provenance,
 ) -> anyhow::Result<Vec<PointResult>> {
     std::fs::create_dir_all(out_dir)
         .with_context(|| format!("cannot create {}", out_dir.display()))?;
@@ -130,6 +204,15 @@ fn compute(
         out_dir.join("points.csv"),
         out_dir.join("points.partial.csv"),
     );
+    let holds_work = points_path.exists() || partial_path.exists();
+    if holds_work && !args.no_resume {
+        // Points of any shard of the same sweep are points of this one.
+        provenance.check_folder(
+            out_dir,
+            "resume only the same sweep (--no-resume starts over, or choose another --out)",
+        )?;
+    }
+    provenance.write(out_dir)?;
     let mine = |index: usize| shard.is_none_or(|(i, n)| index % n == i);
     let mut finished: Vec<PointResult> = Vec::new();
     if !args.no_resume {

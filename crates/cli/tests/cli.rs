@@ -207,6 +207,12 @@ fn sweep_shards_merge_and_resume_to_the_same_table() {
         .collect::<String>()
         + "1e4,1e1,tr";
     std::fs::write(killed.join("points.partial.csv"), journal).expect("journal");
+    // A run writes its provenance before its first point.
+    std::fs::copy(
+        dir.join("whole/provenance.json"),
+        killed.join("provenance.json"),
+    )
+    .expect("provenance");
     let result = fistage()
         .arg("sweep")
         .arg(&scenario)
@@ -426,4 +432,116 @@ fn fmu_refuses_a_scenario_it_cannot_honour() {
         "{stderr}"
     );
     assert!(!dir.join("stop.fmu").exists());
+}
+
+/// Pieces of different work never merge: a shard of another grid, the same
+/// shard twice, a row holding NaN, and resuming into another sweep's folder
+/// are refused, naming what differs.
+#[test]
+fn sweep_refuses_pieces_of_other_work() {
+    let dir = scratch("provenance");
+    std::fs::create_dir_all(&dir).expect("dir");
+    let robot = repository().join("robots/stage_1dof_fi.urdf");
+    let write = |name: &str, points: usize| {
+        let file = dir.join(name);
+        std::fs::write(
+            &file,
+            format!(
+                "robot = {:?}\nduration = 0.2\n[platform]\nvelocity = 0.02\n[controller]\nsensor = \"encoder\"\nactuator = \"drive\"\nk = 1e5\nc = 100\n\
+                 [sweep]\nanalysis = \"linear\"\n[[sweep.axis]]\nparameter = \"controller.k\"\nfrom = 1e4\nto = 1e6\npoints = {points}\nspacing = \"log\"\n",
+                robot.display().to_string()
+            ),
+        )
+        .expect("write");
+        file
+    };
+    let (four, five) = (write("four.toml", 4), write("five.toml", 5));
+    let sweep = |scenario: &Path, extra: &[&str]| {
+        fistage()
+            .arg("sweep")
+            .arg(scenario)
+            .args(extra)
+            .output()
+            .expect("runs")
+    };
+    let path = |name: &str| dir.join(name).to_str().expect("path").to_string();
+    assert!(
+        sweep(&four, &["--shard", "0/2", "--out", &path("a0")])
+            .status
+            .success()
+    );
+    assert!(
+        sweep(&four, &["--shard", "1/2", "--out", &path("a1")])
+            .status
+            .success()
+    );
+    assert!(
+        sweep(&five, &["--shard", "1/2", "--out", &path("b1")])
+            .status
+            .success()
+    );
+    let refused = |output: std::process::Output, needle: &str| {
+        let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+        assert!(!output.status.success(), "{stderr}");
+        assert!(stderr.contains(needle), "{needle}: {stderr}");
+    };
+    refused(
+        sweep(
+            &four,
+            &[
+                "--out",
+                &path("m1"),
+                "--merge",
+                &path("a0"),
+                "--merge",
+                &path("b1"),
+            ],
+        ),
+        "b1",
+    );
+    refused(
+        sweep(
+            &four,
+            &[
+                "--out",
+                &path("m2"),
+                "--merge",
+                &path("a0"),
+                "--merge",
+                &path("a0"),
+            ],
+        ),
+        "given twice",
+    );
+    let points = dir.join("a1/points.csv");
+    let text = std::fs::read_to_string(&points).expect("points");
+    // The first row's last cell becomes NaN.
+    let damaged: Vec<String> = text
+        .lines()
+        .enumerate()
+        .map(|(i, line)| match line.rsplit_once(',') {
+            Some((head, _)) if i == 1 => format!("{head},NaN"),
+            _ => line.to_string(),
+        })
+        .collect();
+    std::fs::write(&points, damaged.join("\n") + "\n").expect("damage");
+    refused(
+        sweep(
+            &four,
+            &[
+                "--out",
+                &path("m3"),
+                "--merge",
+                &path("a0"),
+                "--merge",
+                &path("a1"),
+            ],
+        ),
+        "non-finite",
+    );
+    refused(
+        sweep(&five, &["--out", &path("a0")]),
+        "made by another sweep",
+    );
+    std::fs::remove_dir_all(&dir).ok();
 }

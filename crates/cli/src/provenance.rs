@@ -1,0 +1,152 @@
+//! Where a piece of work came from: every sweep folder (a whole run, a shard,
+//! a resumed journal) holds `provenance.json` with the items that decide its
+//! numbers: the program version, the scenario and robot file contents, the
+//! grid and the analysis settings, plus which shard it is. Merging and
+//! resuming compare them item by item and refuse pieces that differ, naming
+//! the first item that does.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use anyhow::{Context, bail};
+use serde::{Deserialize, Serialize};
+
+/// The file in every sweep folder.
+pub const FILE: &str = "provenance.json";
+
+/// What produced a piece of work.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Provenance {
+    /// Items that must agree for pieces to merge, by name.
+    pub items: BTreeMap<String, String>,
+    /// Which shard (`i/n`), or `all`.
+    pub shard: String,
+}
+
+/// A short content hash: CRC-32 and length, as hex.
+fn content_hash(bytes: &[u8]) -> String {
+    format!(
+        "crc32 {:08x}, {} bytes",
+        crc32fast::hash(bytes),
+        bytes.len()
+    )
+}
+
+impl Provenance {
+    /// The provenance of a sweep of `scenario_file` with this grid and these
+    /// analysis settings (their debug form), as shard `shard`.
+    pub fn of_sweep(
+        scenario_file: &Path,
+        robot_file: &Path,
+        grid: &str,
+        analysis: &str,
+        shard: Option<(usize, usize)>,
+    ) -> anyhow::Result<Self> {
+        let read = |file: &Path| {
+            std::fs::read(file).with_context(|| format!("cannot read {}", file.display()))
+        };
+        let mut items = BTreeMap::new();
+        items.insert(
+            "program".to_string(),
+            format!("fistage {}", env!("CARGO_PKG_VERSION")),
+        );
+        items.insert(
+            "scenario file".to_string(),
+            content_hash(&read(scenario_file)?),
+        );
+        items.insert("robot file".to_string(), content_hash(&read(robot_file)?));
+        items.insert("grid".to_string(), grid.to_string());
+        items.insert("analysis settings".to_string(), analysis.to_string());
+        Ok(Self {
+            items,
+            shard: shard.map_or("all".into(), |(i, n)| format!("{i}/{n}")),
+        })
+    }
+
+    /// Reads a folder's provenance; a folder without one holds no work of
+    /// known origin.
+    pub fn read(folder: &Path) -> anyhow::Result<Option<Self>> {
+        let file = folder.join(FILE);
+        if !file.exists() {
+            return Ok(None);
+        }
+        let text = std::fs::read_to_string(&file)
+            .with_context(|| format!("cannot read {}", file.display()))?;
+        let provenance = serde_json::from_str(&text)
+            .with_context(|| format!("{}: not a provenance record", file.display()))?;
+        Ok(Some(provenance))
+    }
+
+    /// Writes it into a folder.
+    pub fn write(&self, folder: &Path) -> anyhow::Result<()> {
+        let file = folder.join(FILE);
+        let text = serde_json::to_string_pretty(self)? + "\n";
+        std::fs::write(&file, text).with_context(|| format!("cannot write {}", file.display()))
+    }
+
+    /// The first item in which `other` differs from this one, if any.
+    pub fn first_difference(&self, other: &Self) -> Option<String> {
+        let names = self.items.keys().chain(other.items.keys());
+        names
+            .filter(|name| self.items.get(*name) != other.items.get(*name))
+            .min()
+            .map(|name| {
+                let show = |p: &Self| {
+                    p.items
+                        .get(name)
+                        .cloned()
+                        .unwrap_or_else(|| "absent".into())
+                };
+                format!("{name}: {} here, {} there", show(self), show(other))
+            })
+    }
+
+    /// Refuses the work in `folder` unless it has this provenance.
+    pub fn check_folder(&self, folder: &Path, what: &str) -> anyhow::Result<Self> {
+        let Some(theirs) = Self::read(folder)? else {
+            bail!(
+                "{}: no {FILE}, so its points are of unknown origin; {what}",
+                folder.display()
+            );
+        };
+        if let Some(difference) = self.first_difference(&theirs) {
+            bail!(
+                "{}: made by another sweep ({difference}); {what}",
+                folder.display()
+            );
+        }
+        Ok(theirs)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample(grid: &str) -> Provenance {
+        let mut items = BTreeMap::new();
+        items.insert("grid".to_string(), grid.to_string());
+        items.insert("program".to_string(), "fistage 0".to_string());
+        Provenance {
+            items,
+            shard: "0/2".into(),
+        }
+    }
+
+    #[test]
+    fn the_first_differing_item_is_named() {
+        assert_eq!(sample("a").first_difference(&sample("a")), None);
+        let difference = sample("a").first_difference(&sample("b")).expect("differs");
+        assert!(
+            difference.starts_with("grid: a here, b there"),
+            "{difference}"
+        );
+        let mut shard = sample("a");
+        shard.shard = "1/2".into();
+        assert_eq!(
+            sample("a").first_difference(&shard),
+            None,
+            "shards differ, work agrees"
+        );
+    }
+}
