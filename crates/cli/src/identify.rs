@@ -131,6 +131,29 @@ struct OutputArgs {
     /// Replace an earlier result in the --out folder (as a whole).
     #[arg(long)]
     force: bool,
+    /// Exit 0 even when a parameter is not identifiable from the data (it is
+    /// still named, and still left out of override.toml).
+    #[arg(long)]
+    allow_undetermined: bool,
+}
+
+/// Fails, after the report is written and shown, when the data leave
+/// parameters undetermined and the user did not allow it.
+fn refuse_undetermined(
+    output: &OutputArgs,
+    not_identifiable: &[fistage_ident::NotIdentifiable],
+) -> Result<()> {
+    if not_identifiable.is_empty() || output.allow_undetermined {
+        return Ok(());
+    }
+    let names: Vec<String> = not_identifiable
+        .iter()
+        .map(|n| format!("{} ({})", n.parameter, n.reason))
+        .collect();
+    bail!(
+        "not identifiable from these data: {} (--allow-undetermined accepts the fit as it is)",
+        names.join("; ")
+    )
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -373,7 +396,7 @@ fn run_stribeck(args: &StribeckArgs) -> Result<()> {
         folder.commit()?;
     }
     print_report(args.output.json, &json, &report.table());
-    Ok(())
+    refuse_undetermined(&args.output, &report.not_identifiable)
 }
 
 fn run_frf(args: &FrfArgs) -> Result<()> {
@@ -416,7 +439,7 @@ fn run_frf(args: &FrfArgs) -> Result<()> {
         folder.commit()?;
     }
     print_report(args.output.json, &json, &report.table());
-    Ok(())
+    refuse_undetermined(&args.output, &report.not_identifiable)
 }
 
 fn print_report(json: bool, json_text: &str, table: &str) {

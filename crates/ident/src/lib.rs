@@ -43,7 +43,7 @@ pub use error::{IdentError, Result};
 pub use frf::{FrfData, FrfFit, FrfOptions, FrfStart, MassOption, Sigma2Input, fit_frf};
 /// A complex number `re + j im` (frequency responses).
 pub use num_complex::Complex64 as Complex;
-pub use report::{FrfReport, StribeckReport, frf_override, stribeck_override};
+pub use report::{FrfReport, NotIdentifiable, StribeckReport, frf_override, stribeck_override};
 pub use stribeck::{
     AsymmetricFit, AsymmetryTest, Loss, StribeckData, StribeckFit, StribeckOptions, fit_stribeck,
     fit_stribeck_asymmetric,

@@ -35,7 +35,73 @@ pub struct ParamReport {
     pub unit: String,
 }
 
+/// A parameter the data cannot determine, and why.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NotIdentifiable {
+    /// The parameter (`f_c`, `v_s`, `sigma0`, ...).
+    pub parameter: String,
+    /// Why: no interval (a singular or ill-conditioned Jacobian), an
+    /// interval wider than the value, or an estimate on its bound.
+    pub reason: String,
+}
+
+impl NotIdentifiable {
+    fn new(parameter: &str, reason: String) -> Self {
+        Self {
+            parameter: parameter.to_string(),
+            reason,
+        }
+    }
+}
+
+/// The parameters among `params` that the data do not determine.
+fn undetermined(params: &[(&str, &ParamReport)]) -> Vec<NotIdentifiable> {
+    params
+        .iter()
+        .filter_map(|(name, p)| {
+            p.undetermined()
+                .or_else(|| on_bound(name, p.value))
+                .map(|why| NotIdentifiable::new(name, why))
+        })
+        .collect()
+}
+
+/// An estimate on the bound of its LuGre key's rule (the fits keep every
+/// parameter >= 0; sigma0, f_c, f_s and v_s must be > 0).
+fn on_bound(name: &str, value: f64) -> Option<String> {
+    let key = LugreParams::key(name)?;
+    (value <= 0.0).then(|| {
+        format!(
+            "the estimate {} sits on its bound (it must be {})",
+            sig(value),
+            key.rule.requirement()
+        )
+    })
+}
+
 impl ParamReport {
+    /// Why the data do not determine this parameter, if they do not.
+    pub fn undetermined(&self) -> Option<String> {
+        if !self.value.is_finite() {
+            return Some(format!("its estimate is {}", self.value));
+        }
+        let (Some([lo, hi]), Some(se)) = (self.ci95, self.std_error) else {
+            return Some("no interval: the Jacobian is singular or ill-conditioned".into());
+        };
+        if !(lo.is_finite() && hi.is_finite() && se.is_finite()) {
+            return Some("its interval is not finite".into());
+        }
+        if 0.5 * (hi - lo) > self.value.abs() {
+            return Some(format!(
+                "its 95% interval [{}, {}] is wider than the value {}",
+                sig(lo),
+                sig(hi),
+                sig(self.value)
+            ));
+        }
+        None
+    }
+
     fn new(estimate: &Estimate, unit: &str) -> Self {
         Self {
             value: estimate.value,
@@ -112,6 +178,9 @@ pub struct StribeckReport {
     /// Per-branch fits and the asymmetry test, when asked for.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub asymmetry: Option<AsymmetryReport>,
+    /// Parameters these data cannot determine (left out of override.toml).
+    #[serde(default)]
+    pub not_identifiable: Vec<NotIdentifiable>,
     /// Things the user should know about this fit.
     pub warnings: Vec<String>,
 }
@@ -125,6 +194,37 @@ impl StribeckReport {
             negative: BranchReport::new(&a.negative),
             test: a.test.clone(),
         });
+        let mut not_identifiable = undetermined(&[
+            ("f_c", &branch.f_c),
+            ("f_s", &branch.f_s),
+            ("v_s", &branch.v_s),
+            ("sigma2", &branch.sigma2),
+        ]);
+        let flagged =
+            |list: &[NotIdentifiable], name: &str| list.iter().any(|n| n.parameter == name);
+        // f_s on its bound f_c: no Stribeck dip in the data, so no v_s either.
+        if branch.f_s.value - branch.f_c.value <= 1e-9 * branch.f_s.value.abs()
+            && !flagged(&not_identifiable, "v_s")
+        {
+            not_identifiable.push(NotIdentifiable::new(
+                "v_s",
+                "f_s sits on its bound f_s = f_c: the data show no Stribeck effect".into(),
+            ));
+        }
+        let [low, high] = fit.v_s_search;
+        let v_s = branch.v_s.value;
+        if (v_s <= low * (1.0 + 1e-6) || v_s >= high * (1.0 - 1e-6))
+            && !flagged(&not_identifiable, "v_s")
+        {
+            not_identifiable.push(NotIdentifiable::new(
+                "v_s",
+                format!(
+                    "on the edge of the searched range [{}, {}] m/s",
+                    sig(low),
+                    sig(high)
+                ),
+            ));
+        }
         Self {
             kind: "stribeck".to_string(),
             source: source.to_string(),
@@ -137,6 +237,7 @@ impl StribeckReport {
             residuals: fit.residuals.clone(),
             v_s_search: fit.v_s_search,
             asymmetry,
+            not_identifiable,
             warnings: stribeck_warnings(fit, asymmetric),
         }
     }
@@ -195,6 +296,7 @@ impl StribeckReport {
                 }
             );
         }
+        push_not_identifiable(&mut out, &self.not_identifiable);
         push_warnings(&mut out, &self.warnings);
         out
     }
@@ -266,6 +368,9 @@ pub struct FrfReport {
     pub mass_fitted: bool,
     /// Residual statistics.
     pub residuals: FrfResiduals,
+    /// Parameters these data cannot determine (left out of override.toml).
+    #[serde(default)]
+    pub not_identifiable: Vec<NotIdentifiable>,
     /// Things the user should know about this fit.
     pub warnings: Vec<String>,
 }
@@ -291,17 +396,30 @@ impl FrfReport {
                 join_lines(&fit.residuals.suspected_outliers)
             ));
         }
+        let sigma0 = ParamReport::new(&fit.sigma0, "N/m");
+        let sigma1_plus_sigma2 = ParamReport::new(&fit.damping, "N s/m");
+        let sigma1 = fit.sigma1.as_ref().map(|e| ParamReport::new(e, "N s/m"));
+        let mass = ParamReport::new(&fit.mass, "kg");
+        let mut checked = vec![("sigma0", &sigma0), ("sigma1+sigma2", &sigma1_plus_sigma2)];
+        if let Some(s1) = &sigma1 {
+            checked.push(("sigma1", s1));
+        }
+        if fit.mass_fitted {
+            checked.push(("mass", &mass));
+        }
+        let not_identifiable = undetermined(&checked);
         Self {
             kind: "frf".to_string(),
             source: source.to_string(),
             used_phase: fit.used_phase,
-            sigma0: ParamReport::new(&fit.sigma0, "N/m"),
-            sigma1_plus_sigma2: ParamReport::new(&fit.damping, "N s/m"),
-            sigma1: fit.sigma1.as_ref().map(|e| ParamReport::new(e, "N s/m")),
+            sigma0,
+            sigma1_plus_sigma2,
+            sigma1,
             sigma2: fit.sigma2.as_ref().map(|e| ParamReport::new(e, "N s/m")),
-            mass: ParamReport::new(&fit.mass, "kg"),
+            mass,
             mass_fitted: fit.mass_fitted,
             residuals: fit.residuals.clone(),
+            not_identifiable,
             warnings,
         }
     }
@@ -340,6 +458,7 @@ impl FrfReport {
             let _ = write!(out, ", phase rms {} deg (max {} deg)", sig(rms), sig(max));
         }
         let _ = writeln!(out, ", R^2 (dB) {:.6}, dof {}", r.r_squared_db, r.dof);
+        push_not_identifiable(&mut out, &self.not_identifiable);
         push_warnings(&mut out, &self.warnings);
         out
     }
@@ -389,6 +508,16 @@ fn residual_line(r: &ResidualStats, unit: &str) -> String {
         r.r_squared,
         r.dof
     )
+}
+
+fn push_not_identifiable(out: &mut String, list: &[NotIdentifiable]) {
+    for item in list {
+        let _ = writeln!(
+            out,
+            "not identifiable: {} ({})",
+            item.parameter, item.reason
+        );
+    }
 }
 
 fn push_warnings(out: &mut String, warnings: &[String]) {
@@ -467,7 +596,7 @@ pub fn stribeck_override(element: &str, report: &StribeckReport) -> String {
         ("v_s", &report.v_s),
         ("sigma2", &report.sigma2),
     ];
-    write_override(&mut out, element, &params);
+    write_override(&mut out, element, &params, &report.not_identifiable);
     out
 }
 
@@ -515,20 +644,39 @@ pub fn frf_override(
             ("sigma2", &s.sigma2),
         ]);
     }
-    write_override(&mut out, element, &params);
+    let mut not_identifiable = report.not_identifiable.clone();
+    not_identifiable.extend(
+        stribeck
+            .iter()
+            .flat_map(|s| s.not_identifiable.iter().cloned()),
+    );
+    write_override(&mut out, element, &params, &not_identifiable);
     out
 }
 
 /// The `[overrides.<element>]` table, written by the TOML serializer (so no
 /// element name can break it). Each value passes the parameter table's rule
 /// for its LuGre key, or it is left out with a comment saying why.
-fn write_override(out: &mut String, element: &str, params: &[(&str, &ParamReport)]) {
+fn write_override(
+    out: &mut String,
+    element: &str,
+    params: &[(&str, &ParamReport)],
+    not_identifiable: &[NotIdentifiable],
+) {
     let _ = writeln!(out, "# 95% intervals (SI units):");
     for (name, p) in params {
         let _ = writeln!(out, "#   {name:<7} {} {}", interval(p.ci95), p.unit);
     }
     let mut values = toml::Table::new();
     for (name, p) in params {
+        if let Some(item) = not_identifiable.iter().find(|n| n.parameter == *name) {
+            let _ = writeln!(
+                out,
+                "# {name} is not identifiable from these data ({}); not written",
+                item.reason
+            );
+            continue;
+        }
         match LugreParams::key(name) {
             Some(key) if key.rule.admits(p.value) => {
                 values.insert(key.name.to_string(), toml::Value::Float(p.value));
@@ -678,7 +826,7 @@ mod tests {
         let (good, bad) = (param(5.1), param(-1.0));
         for element in ["bearing_friction", "bearing rl", "a\"b", "x.y", "ü"] {
             let mut out = String::new();
-            write_override(&mut out, element, &[("f_c", &good), ("f_s", &bad)]);
+            write_override(&mut out, element, &[("f_c", &good), ("f_s", &bad)], &[]);
             let table: toml::Table = out.parse().expect("valid TOML");
             let values = &table["overrides"][element];
             assert_eq!(values["f_c"].as_float(), Some(5.1), "{out}");

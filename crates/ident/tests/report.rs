@@ -171,3 +171,45 @@ fn plotting_csvs_hold_data_and_fit() {
     }
     assert_eq!(frf_curve_csv(&data, &fit, 200).lines().count(), 201);
 }
+
+/// Data that cannot determine the parameters name them as not identifiable,
+/// and the override leaves them out; good data name none.
+#[test]
+fn undetermined_parameters_are_named_and_not_written() {
+    let p = LugreParams::paper_table1();
+    let good = StribeckSynth::noisy(p, 2).generate();
+    let fit = fit_stribeck(&good, &StribeckOptions::default()).unwrap();
+    let report = StribeckReport::new("fss.csv", &fit, None);
+    assert!(
+        report.not_identifiable.is_empty(),
+        "{:?}",
+        report.not_identifiable
+    );
+    let mut zero = good.clone();
+    zero.force.iter_mut().for_each(|f| *f = 0.0);
+    let mut huge = good.clone();
+    huge.force.iter_mut().for_each(|f| *f *= 1e300);
+    for (case, data) in [("all-zero forces", zero), ("forces x 1e300", huge)] {
+        let Ok(fit) = fit_stribeck(&data, &StribeckOptions::default()) else {
+            continue; // refusing to fit at all is a clear answer too
+        };
+        let report = StribeckReport::new("bad.csv", &fit, None);
+        assert!(
+            !report.not_identifiable.is_empty(),
+            "{case}: every parameter passed"
+        );
+        let toml_text = stribeck_override("bearing_friction", &report);
+        let table: toml::Table = toml_text.parse().expect("valid TOML");
+        let written = table["overrides"]["bearing_friction"]
+            .as_table()
+            .expect("table");
+        for item in &report.not_identifiable {
+            assert!(
+                !written.contains_key(&item.parameter),
+                "{case}: {} written although not identifiable",
+                item.parameter
+            );
+            assert!(toml_text.contains("not identifiable"), "{case}");
+        }
+    }
+}
