@@ -81,3 +81,25 @@ fn a_verdict_the_residuals_cannot_back_is_undetermined() {
         assert_ne!(analysis.verdict, Verdict::Stable, "{kind:?}");
     }
 }
+
+/// A native run whose step size collapses stops after one window of steps
+/// with the reason, instead of burning its whole step budget first.
+#[test]
+fn a_collapsing_step_size_fails_fast() {
+    let robot_file = path("robots/stage_1dof_fi.urdf");
+    let text = format!(
+        "robot = {:?}\nduration = 5.0\n[platform]\nvelocity = 0.02\n[controller]\nsensor = \"encoder\"\nactuator = \"drive\"\nk = 6e4\nc = 100.0\n[overrides.bearing_friction]\nsigma0 = 1e12\n",
+        robot_file.display().to_string()
+    );
+    let scenario = Scenario::from_str(&text, &path("scenarios/stiff.toml")).expect("scenario");
+    let robot = fistage_model::RobotSpec::from_file(&robot_file).expect("robot");
+    let (robot, model) = assemble(robot, &scenario).expect("model");
+    let loaded = fistage_model::Loaded {
+        scenario,
+        robot,
+        model,
+    };
+    let error = fistage_sim::run_scenario(&loaded, &mut |_| {}).expect_err("cannot succeed");
+    let message = error.to_string();
+    assert!(message.contains("step size collapsed"), "{message}");
+}

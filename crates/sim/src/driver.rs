@@ -168,6 +168,7 @@ pub(crate) fn drive<I: Integrating>(
     let ends = segment_ends(system.excitation.breakpoints(), integrator.time(), t_end);
     let start = integrator.counts();
     let used = |counts: StepCounts| counts.steps + counts.rejected - start.steps - start.rejected;
+    let mut pace = Pace::new(integrator.time());
     for (segment, &t_stop) in ends.iter().enumerate() {
         if segment > 0 {
             integrator.restart(system);
@@ -183,8 +184,53 @@ pub(crate) fn drive<I: Integrating>(
                     steps,
                 });
             }
+            pace.check(integrator.time(), steps, t_end, max_steps)?;
             after_step(integrator);
         }
     }
     Ok(())
+}
+
+/// Steps between two looks at the pace of a run.
+const PACE_WINDOW: u64 = 1 << 16;
+
+/// How far past the step budget a run's recent pace must point before it is
+/// stopped early: a run only fails this way when its last 65 536 steps
+/// advanced so little that four times the whole budget would not finish it.
+const PACE_MARGIN: f64 = 4.0;
+
+/// The pace of a run over its last window of steps, to stop early a run
+/// whose step size has collapsed instead of letting it burn its whole budget.
+struct Pace {
+    since_time: f64,
+    since_steps: u64,
+}
+
+impl Pace {
+    fn new(t: f64) -> Self {
+        Self {
+            since_time: t,
+            since_steps: 0,
+        }
+    }
+
+    fn check(&mut self, t: f64, steps: u64, t_end: f64, max_steps: u64) -> Result<(), SimError> {
+        if steps - self.since_steps < PACE_WINDOW {
+            return Ok(());
+        }
+        let advanced = t - self.since_time;
+        let rate = (steps - self.since_steps) as f64 / advanced.max(f64::MIN_POSITIVE);
+        let projected = steps as f64 + rate * (t_end - t);
+        if projected > PACE_MARGIN * max_steps as f64 {
+            return Err(SimError::StepSizeCollapse {
+                t,
+                h: advanced / (steps - self.since_steps) as f64,
+                projected,
+                max_steps,
+            });
+        }
+        self.since_time = t;
+        self.since_steps = steps;
+        Ok(())
+    }
 }

@@ -59,6 +59,21 @@ pub enum SimError {
         /// Steps taken.
         steps: u64,
     },
+    /// The step size collapsed: at its recent pace the run would need far
+    /// more steps than its budget.
+    #[error(
+        "the step size collapsed to {h:.3e} s at t = {t:.6} s: at this pace the run needs about {projected:.3e} steps, more than four times solver.max_steps = {max_steps} (the model changes faster than the tolerance allows there: check its parameters, or loosen solver.rtol)"
+    )]
+    StepSizeCollapse {
+        /// Time reached, s.
+        t: f64,
+        /// Mean step over the last window, s.
+        h: f64,
+        /// Steps the run would need at that pace.
+        projected: f64,
+        /// The budget.
+        max_steps: u64,
+    },
     /// A fixed-step engine would need more steps than the budget allows.
     #[error(
         "the fixed step dt = {dt:.3e} s needs {steps:.3e} steps, more than solver.max_steps = {max_steps} (raise rapier.dt or solver.max_steps, or shorten the run)"
