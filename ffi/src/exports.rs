@@ -12,8 +12,10 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::PathBuf;
 use std::sync::{Mutex, MutexGuard};
 
-use crate::instance::{CallError, Instance, Phase, Snapshot};
+use crate::instance::{CallError, Instance};
 use crate::logger::{LOG_CATEGORIES, Logger};
+use crate::phase::Phase;
+use crate::state::Snapshot;
 use crate::types::{
     CO_SIMULATION, Status, fmi2Boolean, fmi2Byte, fmi2CallbackFunctions, fmi2Component,
     fmi2FMUstate, fmi2Integer, fmi2Real, fmi2Status, fmi2StatusKind, fmi2String, fmi2Type,

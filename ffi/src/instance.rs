@@ -7,12 +7,12 @@
 use std::path::Path;
 
 use fistage_model::{Inputs, LoadError, Model, RobotSpec, Scenario, Workspace, assemble};
-use fistage_sim::{
-    Checkpoint, Excitation, HeldInputs, Stepper, StepperTolerances, initial_state_with,
-};
+use fistage_sim::{Excitation, HeldInputs, Stepper, StepperTolerances, initial_state_with};
 use thiserror::Error;
 
 use crate::model_description::{Capabilities, model_description};
+use crate::phase::Phase;
+use crate::state::Snapshot;
 use crate::variables::{Binding, Causality, Variable, variables};
 
 /// What the unit offers importers.
@@ -29,53 +29,6 @@ thread_local! {
 
 /// Largest number of internal steps in one communication step.
 const MAX_STEPS_PER_COMMUNICATION_STEP: u64 = 5_000_000;
-
-/// Where an instance is in the FMI 2.0 Co-Simulation state machine.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Phase {
-    /// After fmi2Instantiate or fmi2Reset: parameters and inputs may be set.
-    Instantiated,
-    /// Between fmi2EnterInitializationMode and fmi2ExitInitializationMode.
-    Initialization,
-    /// Ready for fmi2DoStep.
-    StepComplete,
-    /// The last fmi2DoStep failed; the state may be restored or the instance reset.
-    StepFailed,
-    /// After fmi2Terminate: results may be read.
-    Terminated,
-    /// An internal error made the instance unusable; only fmi2FreeInstance helps.
-    Fatal,
-}
-
-impl Phase {
-    fn name(self) -> &'static str {
-        match self {
-            Phase::Instantiated => "instantiated",
-            Phase::Initialization => "initialization mode",
-            Phase::StepComplete => "step complete",
-            Phase::StepFailed => "step failed",
-            Phase::Terminated => "terminated",
-            Phase::Fatal => "fatal error",
-        }
-    }
-
-    pub(crate) fn code(self) -> u8 {
-        self as u8
-    }
-
-    pub(crate) fn from_code(code: u8) -> Option<Self> {
-        [
-            Phase::Instantiated,
-            Phase::Initialization,
-            Phase::StepComplete,
-            Phase::StepFailed,
-            Phase::Terminated,
-            Phase::Fatal,
-        ]
-        .into_iter()
-        .find(|p| p.code() == code)
-    }
-}
 
 /// Why a call was refused. Every variant maps to fmi2Error.
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -120,17 +73,6 @@ struct Source {
     robot: RobotSpec,
 }
 
-/// Everything that changes while an instance runs; an FMU state is a copy of it.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Snapshot {
-    pub(crate) phase: Phase,
-    pub(crate) values: Vec<f64>,
-    pub(crate) start_time: f64,
-    pub(crate) stop_time: Option<f64>,
-    pub(crate) tolerance: Option<f64>,
-    pub(crate) checkpoint: Option<Checkpoint>,
-}
-
 /// A co-simulation instance.
 pub struct Instance {
     source: Source,
@@ -166,7 +108,7 @@ impl std::fmt::Debug for Instance {
 /// and refuses a scenario the unit cannot honour: it steps with the native
 /// engine, which has no colliders.
 fn load_source(resources: &Path) -> Result<Source, LoadError> {
-    let scenario = Scenario::from_file(&resources.join(crate::package::SCENARIO_FILE))?;
+    let scenario = Scenario::from_file(&resources.join(crate::resources::SCENARIO_FILE))?;
     if scenario.solver.engine != fistage_model::EngineKind::Native {
         return Err(scenario.error(
             "solver.engine",

@@ -40,12 +40,16 @@ mod logger;
 mod misuse_tests;
 pub mod model_description;
 pub mod package;
+mod phase;
+mod resources;
 mod state;
 pub mod types;
 pub mod variables;
 
-pub use instance::{CAPABILITIES, CallError, Instance, Phase};
+pub use instance::{CAPABILITIES, CallError, Instance};
 pub use logger::LOG_CATEGORIES;
 pub use model_description::{Capabilities, MODEL_IDENTIFIER, model_description};
 pub use package::{PackageError, build_fmu};
+pub use phase::Phase;
+pub use state::Snapshot;
 pub use variables::{Binding, Causality, Variable, variables};

@@ -19,12 +19,7 @@ use thiserror::Error;
 use crate::instance::{CAPABILITIES, Instance};
 use crate::model_description::{MODEL_IDENTIFIER, model_description};
 
-/// The scenario's name inside `resources/`.
-pub const SCENARIO_FILE: &str = "scenario.toml";
-/// The robot's name inside `resources/`.
-pub const ROBOT_FILE: &str = "robot.urdf";
-/// A CSV reference's name inside `resources/`.
-pub const REFERENCE_FILE: &str = "reference.csv";
+pub use crate::resources::{REFERENCE_FILE, ROBOT_FILE, SCENARIO_FILE};
 /// The shared library's file name as the cdylib build writes it.
 pub const LIBRARY_FILE: &str = "libfistage_fmi.so";
 

@@ -7,7 +7,18 @@
 
 use fistage_sim::{Checkpoint, StepCounts};
 
-use crate::instance::{Phase, Snapshot};
+use crate::phase::Phase;
+
+/// Everything that changes while an instance runs; an FMU state is a copy of it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Snapshot {
+    pub(crate) phase: Phase,
+    pub(crate) values: Vec<f64>,
+    pub(crate) start_time: f64,
+    pub(crate) stop_time: Option<f64>,
+    pub(crate) tolerance: Option<f64>,
+    pub(crate) checkpoint: Option<Checkpoint>,
+}
 
 const MAGIC: &[u8; 8] = b"FISTAGE\0";
 const VERSION: u32 = 2;
