@@ -144,14 +144,14 @@ fn merge(
         if shards.contains(&theirs.shard) {
             bail!("{}: shard {} is given twice", dir.display(), theirs.shard);
         }
-        let split = |s: &str| s.split_once('/').map(|(_, n)| n.to_string());
-        if let (Some(first), Some(this)) = (shards.first(), Some(&theirs.shard))
-            && split(first) != split(this)
+        let parts = |s: &str| s.split_once('/').map(|(_, n)| n.to_string());
+        if let Some(first) = shards.first()
+            && parts(first) != parts(&theirs.shard)
         {
             bail!(
                 "{}: shard {} splits the grid otherwise than shard {first}",
                 dir.display(),
-                this
+                theirs.shard
             );
         }
         shards.push(theirs.shard.clone());
@@ -412,9 +412,11 @@ fn draw(
 fn summarize(results: &[PointResult]) {
     let count = |f: &dyn Fn(&PointResult) -> bool| results.iter().filter(|r| f(r)).count();
     println!(
-        "linear: {} stable, {} unstable; simulation: {} stable, {} oscillating; {} bistable",
+        "linear: {} stable, {} unstable, {} undetermined; simulation: {} stable, {} oscillating; {} bistable",
         count(&|r| r.stable_linear == Some(true)),
         count(&|r| r.stable_linear == Some(false)),
+        // Analysed (a largest real part exists) without a verdict the numerics back.
+        count(&|r| r.stable_linear.is_none() && r.max_real_eig.is_some()),
         count(&|r| r.stable_sim == Some(true)),
         count(&|r| r.stable_sim == Some(false)),
         count(&|r| r.bistable == Some(true)),

@@ -31,7 +31,13 @@ pub struct InvalidLugreParameter {
 }
 
 impl InvalidLugreParameter {
-    fn new(name: &'static str, value: f64, rule: Rule) -> Self {
+    /// `name` breaking `rule` (a non-finite value breaks "finite").
+    pub(crate) fn new(name: &'static str, value: f64, rule: Rule) -> Self {
+        let rule = if value.is_finite() {
+            rule
+        } else {
+            Rule::Finite
+        };
         Self {
             name,
             value,

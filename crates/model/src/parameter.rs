@@ -373,17 +373,7 @@ impl Parameter {
         let rule = self.rule();
         match self.target {
             Target::Lugre(_, key) if !rule.admits(value) => {
-                let rule = if value.is_finite() {
-                    rule
-                } else {
-                    Rule::Finite
-                };
-                Err(InvalidLugreParameter {
-                    name: key.name,
-                    value,
-                    requirement: rule.requirement().to_string(),
-                }
-                .to_string())
+                Err(InvalidLugreParameter::new(key.name, value, rule).to_string())
             }
             _ => rule.check(value).map_err(|e| e.to_string()),
         }
