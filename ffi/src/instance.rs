@@ -21,6 +21,74 @@ pub const CAPABILITIES: Capabilities = Capabilities {
     directional_derivatives: true,
 };
 
+/// The rules of fmi2SetupExperiment's arguments, which a restored FMU state
+/// obeys too: a finite start, a finite stop not before it, and a tolerance
+/// the program accepts.
+fn check_experiment(
+    tolerance: Option<f64>,
+    start_time: f64,
+    stop_time: Option<f64>,
+) -> Result<(), String> {
+    if !start_time.is_finite() {
+        return Err(format!("startTime must be finite, got {start_time}"));
+    }
+    if let Some(stop) = stop_time
+        && !(stop.is_finite() && stop >= start_time)
+    {
+        return Err(format!("stopTime {stop} is before startTime {start_time}"));
+    }
+    if let Some(rtol) = tolerance {
+        fistage_model::SolverSettings::check_rtol(rtol)
+            .map_err(|why| format!("tolerance {why}"))?;
+    }
+    Ok(())
+}
+
+/// More steps or evaluations than any run takes (2^53, where counting in
+/// f64 would stop being exact); a restored state beyond it is corrupt, and
+/// the counts never overflow.
+const MAX_PLAUSIBLE_COUNT: u64 = 1 << 53;
+
+/// What a state this unit saved always satisfies, so that a state made or
+/// damaged elsewhere (with a checksum that fits) is refused before it is
+/// restored: the experiment's rules, finite settable values, and a
+/// checkpoint at a finite time within the experiment with a finite state,
+/// a finite, non-negative step size and plausible step counts.
+fn check_snapshot(snapshot: &Snapshot, variables: &[Variable]) -> Result<(), String> {
+    let corrupt = |why: String| Err(format!("the FMU state is corrupt: {why}"));
+    if let Err(why) = check_experiment(snapshot.tolerance, snapshot.start_time, snapshot.stop_time)
+    {
+        return corrupt(why);
+    }
+    for (variable, value) in variables.iter().zip(&snapshot.values) {
+        if variable.causality != Causality::Output && !value.is_finite() {
+            return corrupt(format!("{} is {value}", variable.name));
+        }
+    }
+    let Some(checkpoint) = &snapshot.checkpoint else {
+        return Ok(());
+    };
+    let t = checkpoint.t;
+    let within = t >= snapshot.start_time && snapshot.stop_time.is_none_or(|stop| t <= stop);
+    if !(t.is_finite() && within) {
+        return corrupt(format!("its time {t:e} s is outside the experiment"));
+    }
+    if !(checkpoint.h.is_finite() && checkpoint.h >= 0.0) {
+        return corrupt(format!("its step size is {:e} s", checkpoint.h));
+    }
+    if let Some(i) = checkpoint.x.iter().position(|x| !x.is_finite()) {
+        return corrupt(format!("state {i} is {}", checkpoint.x[i]));
+    }
+    let counts = &checkpoint.counts;
+    if [counts.steps, counts.rejected, counts.rhs_evaluations]
+        .iter()
+        .any(|&n| n > MAX_PLAUSIBLE_COUNT)
+    {
+        return corrupt(format!("its step counts ({counts:?}) are beyond any run"));
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 thread_local! {
     /// Test hook: the next fmi2DoStep on this thread panics inside the step.
@@ -223,22 +291,7 @@ impl Instance {
         stop_time: Option<f64>,
     ) -> Result<(), CallError> {
         self.require("fmi2SetupExperiment", &[Phase::Instantiated])?;
-        if !start_time.is_finite() {
-            return Err(CallError::InvalidArgument(format!(
-                "startTime must be finite, got {start_time}"
-            )));
-        }
-        if let Some(stop) = stop_time
-            && !(stop.is_finite() && stop >= start_time)
-        {
-            return Err(CallError::InvalidArgument(format!(
-                "stopTime {stop} is before startTime {start_time}"
-            )));
-        }
-        if let Some(rtol) = tolerance {
-            fistage_model::SolverSettings::check_rtol(rtol)
-                .map_err(|why| CallError::InvalidArgument(format!("tolerance {why}")))?;
-        }
+        check_experiment(tolerance, start_time, stop_time).map_err(CallError::InvalidArgument)?;
         self.start_time = start_time;
         self.stop_time = stop_time;
         self.tolerance = tolerance;
@@ -484,13 +537,13 @@ impl Instance {
             || (communication_point - now).abs() > 1e-9 * now.abs().max(1.0)
         {
             return Err(CallError::InvalidArgument(format!(
-                "currentCommunicationPoint {communication_point} is not the unit's time {now}"
+                "currentCommunicationPoint {communication_point:?} is not the unit's time {now:?}"
             )));
         }
         let target = communication_point + step;
         if target <= now {
             return Err(CallError::InvalidArgument(format!(
-                "step {step} from {communication_point} does not pass the unit's time {now}"
+                "step {step:?} from {communication_point:?} does not pass the unit's time {now:?}"
             )));
         }
         if let Some(stop) = self.stop_time
@@ -557,6 +610,7 @@ impl Instance {
                 "the FMU state belongs to a different unit".into(),
             ));
         }
+        check_snapshot(snapshot, &self.variables).map_err(CallError::InvalidArgument)?;
         // Parameters first: they decide the state layout (k_i adds a state).
         let previous = self.values.clone();
         self.values = snapshot.values.clone();

@@ -585,3 +585,87 @@ fn a_state_with_another_layout_restores_after_its_parameters() {
     }
     fmi2FreeInstance(saver.c);
 }
+
+/// Found while writing the `fmu_state` fuzz target, whose checksum-sealing
+/// mode reaches past the CRC: states whose checksum fits but whose contents
+/// no unit writes (a NaN tolerance, a time
+/// outside the experiment, a negative or NaN step size, a NaN in the state
+/// vector or in a parameter) were restored, and failed later, or not at all.
+/// Each is refused at fmi2SetFMUstate with the reason, and changes nothing.
+#[test]
+fn states_that_break_the_units_rules_are_refused_even_with_a_good_checksum() {
+    use crate::state::{Snapshot, decode, encode};
+    let (uri, _) = resources("sealed");
+    let folder = PathBuf::from(uri.to_str().expect("URI").trim_start_matches("file://"));
+    let mut unit = Instance::new(&folder, None).expect("instance");
+    unit.setup_experiment(None, 0.0, Some(1.0)).expect("setup");
+    unit.enter_initialization().expect("enter");
+    unit.exit_initialization().expect("exit");
+    unit.do_step(0.0, 1e-3).expect("step");
+    let good = unit.snapshot();
+    let guid = unit.guid().to_string();
+    type Damage = fn(&mut Snapshot);
+    let cases: [(&str, Damage, &str); 12] = [
+        (
+            "NaN tolerance",
+            |s| s.tolerance = Some(f64::NAN),
+            "tolerance",
+        ),
+        ("tolerance 5", |s| s.tolerance = Some(5.0), "tolerance"),
+        (
+            "infinite start",
+            |s| s.start_time = f64::INFINITY,
+            "startTime",
+        ),
+        (
+            "stop before start",
+            |s| s.stop_time = Some(-1.0),
+            "stopTime",
+        ),
+        ("NaN time", |s| checkpoint(s).t = f64::NAN, "time"),
+        (
+            "time past stop",
+            |s| checkpoint(s).t = 2.0,
+            "outside the experiment",
+        ),
+        ("NaN step size", |s| checkpoint(s).h = f64::NAN, "step size"),
+        (
+            "negative step size",
+            |s| checkpoint(s).h = -1.0,
+            "step size",
+        ),
+        ("NaN state", |s| checkpoint(s).x[0] = f64::NAN, "state 0"),
+        (
+            "infinite state",
+            |s| checkpoint(s).x[1] = f64::INFINITY,
+            "state 1",
+        ),
+        ("NaN gain", |s| s.values[0] = f64::NAN, "is NaN"),
+        // Found by the fuzzer: step counts near 2^64 overflowed the count of
+        // steps taken in a call (a panic, so fmi2Fatal).
+        (
+            "step counts near 2^64",
+            |s| checkpoint(s).counts.steps = u64::MAX - 3,
+            "step counts",
+        ),
+    ];
+    fn checkpoint(s: &mut Snapshot) -> &mut fistage_sim::Checkpoint {
+        s.checkpoint.as_mut().expect("a stepping state")
+    }
+    for (case, damage, reason) in cases {
+        let mut damaged = good.clone();
+        damage(&mut damaged);
+        let sealed = decode(&guid, &encode(&guid, &damaged)).expect("the checksum fits");
+        let error = unit.restore(&sealed).expect_err(case).to_string();
+        assert!(
+            error.contains("corrupt") && error.contains(reason),
+            "{case}: {error}"
+        );
+        assert_eq!(
+            unit.snapshot(),
+            good,
+            "{case}: a refused state changed the unit"
+        );
+    }
+    unit.do_step(1e-3, 1e-3).expect("the unit still steps");
+}

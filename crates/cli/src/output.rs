@@ -4,7 +4,8 @@
 //! folder is removed). A target that already holds files is an earlier
 //! result: it is refused unless the user says `--force`, and then it is
 //! replaced as a whole, so no file of the earlier result stays beside the new
-//! ones.
+//! ones. A long command (a sweep) stages into a journal folder that outlives a
+//! failure, so that the next command resumes from it.
 
 use std::path::{Path, PathBuf};
 
@@ -16,6 +17,8 @@ use anyhow::{Context, bail};
 pub struct OutputFolder {
     target: PathBuf,
     staging: PathBuf,
+    /// Whether the staging folder is a journal that a failed command leaves.
+    keep_on_failure: bool,
     committed: bool,
 }
 
@@ -23,30 +26,14 @@ impl OutputFolder {
     /// Starts a result for `target`. Refuses a target that is a file, or a
     /// folder holding files, unless `force`.
     pub fn begin(target: &Path, force: bool) -> anyhow::Result<Self> {
-        if target.is_file() {
-            bail!(
-                "{}: is a file, not an output folder; name a folder with --out",
-                target.display()
-            );
-        }
-        let holds_files =
-            std::fs::read_dir(target).is_ok_and(|mut entries| entries.next().is_some());
-        if holds_files && !force {
+        refuse_file(target)?;
+        if holds_files(target) && !force {
             bail!(
                 "{}: holds an earlier result; give --force to replace it, or choose another folder with --out",
                 target.display()
             );
         }
-        let parent = match target.parent() {
-            Some(parent) if !parent.as_os_str().is_empty() => parent.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
-        std::fs::create_dir_all(&parent)
-            .with_context(|| format!("cannot create {}", parent.display()))?;
-        let name = target
-            .file_name()
-            .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
-        let staging = parent.join(format!(".{name}.partial-{}", std::process::id()));
+        let staging = staging_beside(target, &format!("partial-{}", std::process::id()))?;
         if staging.exists() {
             std::fs::remove_dir_all(&staging)
                 .with_context(|| format!("cannot clear {}", staging.display()))?;
@@ -56,6 +43,25 @@ impl OutputFolder {
         Ok(Self {
             target: target.to_path_buf(),
             staging,
+            keep_on_failure: false,
+            committed: false,
+        })
+    }
+
+    /// Starts (or takes up again) a long result for `target` whose staging
+    /// folder, `.<name>.journal` beside it, outlives a failed or killed
+    /// command, so that the next one resumes from what it holds. The caller
+    /// decides what an earlier result in `target` means (see
+    /// [`holds_files`]).
+    pub fn resumable(target: &Path) -> anyhow::Result<Self> {
+        refuse_file(target)?;
+        let staging = staging_beside(target, "journal")?;
+        std::fs::create_dir_all(&staging)
+            .with_context(|| format!("cannot create {}", staging.display()))?;
+        Ok(Self {
+            target: target.to_path_buf(),
+            staging,
+            keep_on_failure: true,
             committed: false,
         })
     }
@@ -91,9 +97,39 @@ impl OutputFolder {
     }
 }
 
+/// Whether `target` is a folder that holds any file (an earlier result).
+pub fn holds_files(target: &Path) -> bool {
+    std::fs::read_dir(target).is_ok_and(|mut entries| entries.next().is_some())
+}
+
+fn refuse_file(target: &Path) -> anyhow::Result<()> {
+    if target.is_file() {
+        bail!(
+            "{}: is a file, not an output folder; name a folder with --out",
+            target.display()
+        );
+    }
+    Ok(())
+}
+
+/// `.<name>.<tag>` in the target's parent folder (made if missing), on the
+/// same file system as the target, so that moving it into place is a rename.
+fn staging_beside(target: &Path, tag: &str) -> anyhow::Result<PathBuf> {
+    let parent = match target.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    std::fs::create_dir_all(&parent)
+        .with_context(|| format!("cannot create {}", parent.display()))?;
+    let name = target
+        .file_name()
+        .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+    Ok(parent.join(format!(".{name}.{tag}")))
+}
+
 impl Drop for OutputFolder {
     fn drop(&mut self) {
-        if !self.committed {
+        if !self.committed && !self.keep_on_failure {
             let _ = std::fs::remove_dir_all(&self.staging);
         }
     }

@@ -2,9 +2,13 @@
 //! scenario's `[sweep]` grid in parallel with a progress bar, write
 //! `points.csv` (a column per axis, then `stable_linear`, `stable_sim`,
 //! `amplitude`, `max_real_eig`, `bistable`), `points.json`, and a stability
-//! map. Finished points are appended to `points.partial.csv` as they come, so a
-//! killed sweep resumes where it stopped; `--shard i/n` computes every n-th
-//! point starting at i (for batch job arrays) and `--merge` joins shard folders.
+//! map. The result is staged in `.<name>.journal` beside the output folder and
+//! moved into place whole when complete. Finished points are appended to the
+//! journal's `points.partial.csv` as they come, so a killed sweep resumes
+//! where it stopped; so does a sweep into a folder holding points of the same
+//! sweep (another shard, say). A folder holding other work is replaced only
+//! with `--force`. `--shard i/n` computes every n-th point starting at i (for
+//! batch job arrays) and `--merge` joins shard folders.
 
 use std::fs::OpenOptions;
 use std::io::Write;
@@ -18,6 +22,7 @@ use fistage_analysis::sweep::{
 use fistage_model::RobotSpec;
 use fistage_plot::{ColourScale, Heatmap, Series, XyPlot, write_heatmap, write_xy};
 
+use crate::output::{OutputFolder, holds_files};
 use crate::progress;
 use crate::provenance::Provenance;
 
@@ -38,9 +43,13 @@ pub struct SweepArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Recompute points already in the output folder.
+    /// Recompute points already in the output folder or its journal.
     #[arg(long)]
     pub no_resume: bool,
+    /// Replace an output folder that holds other work (or, with --no-resume,
+    /// this sweep's points).
+    #[arg(long)]
+    pub force: bool,
 }
 
 fn parse_shard(text: &str) -> anyhow::Result<(usize, usize)> {
@@ -80,34 +89,37 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
         ),
         shard,
     )?;
-    let results = if args.merge.is_empty() {
-        compute(
+    let (folder, results) = if args.merge.is_empty() {
+        let folder = OutputFolder::resumable(&out_dir)?;
+        let results = compute(
             args,
             &loaded,
             &robot_file,
             &spec,
             shard,
+            &folder,
             &out_dir,
             &provenance,
-        )?
+        )?;
+        (folder, results)
     } else {
+        let folder = OutputFolder::begin(&out_dir, args.force)?;
         let all = merge(&args.merge, &spec, &provenance)?;
-        std::fs::create_dir_all(&out_dir)
-            .with_context(|| format!("cannot create {}", out_dir.display()))?;
         Provenance {
             shard: "merged".into(),
             ..provenance
         }
-        .write(&out_dir)?;
-        all
+        .write(folder.path())?;
+        (folder, all)
     };
-    write_points(&spec, &results, &out_dir)?;
+    write_points(&spec, &results, folder.path())?;
     let pictures = draw(
         &crate::figures::figure_title(&loaded),
         &spec,
         &results,
-        &out_dir,
+        folder.path(),
     )?;
+    folder.commit()?;
     let missing = spec.len() - results.len();
     println!(
         "{} of {} points in {}/points.csv{}{}",
@@ -189,39 +201,56 @@ fn refuse_non_finite_rows(points: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The points of the sweep (or shard): those already in the output folder
+/// (when it holds this sweep) and in the journal, then the rest, computed
+/// with every finished one appended to the journal as it comes.
+#[allow(clippy::too_many_arguments)]
 fn compute(
     args: &SweepArgs,
     loaded: &fistage_model::Loaded,
     robot_file: &RobotSpec,
     spec: &SweepSpec,
     shard: Option<(usize, usize)>,
+    folder: &OutputFolder,
     out_dir: &Path,
     provenance: &Provenance,
 ) -> anyhow::Result<Vec<PointResult>> {
-    std::fs::create_dir_all(out_dir)
-        .with_context(|| format!("cannot create {}", out_dir.display()))?;
-    let (points_path, partial_path) = (
-        out_dir.join("points.csv"),
-        out_dir.join("points.partial.csv"),
-    );
-    let holds_work = points_path.exists() || partial_path.exists();
-    if holds_work && !args.no_resume {
-        // Points of any shard of the same sweep are points of this one.
-        provenance.check_folder(
+    let mut finished: Vec<PointResult> = Vec::new();
+    if holds_files(out_dir) {
+        let earlier = provenance.check_folder(
             out_dir,
+            "give --force to replace it, or choose another --out",
+        );
+        match (earlier, args.force, args.no_resume) {
+            (_, true, _) => {}
+            (Ok(_), false, false) => {
+                // Points of any shard of the same sweep are points of this one.
+                finished.extend(read_rows(&out_dir.join("points.csv"), spec));
+                finished.extend(read_rows(&out_dir.join("points.partial.csv"), spec));
+            }
+            (Ok(_), false, true) => bail!(
+                "{}: holds points of this sweep; give --force with --no-resume to recompute them",
+                out_dir.display()
+            ),
+            (Err(refused), false, _) => return Err(refused),
+        }
+    }
+    let journal = folder.path();
+    let partial_path = journal.join("points.partial.csv");
+    if args.no_resume {
+        clear(journal)?;
+    } else if partial_path.exists() {
+        provenance.check_folder(
+            journal,
             "resume only the same sweep (--no-resume starts over, or choose another --out)",
         )?;
-    }
-    provenance.write(out_dir)?;
-    let mine = |index: usize| shard.is_none_or(|(i, n)| index % n == i);
-    let mut finished: Vec<PointResult> = Vec::new();
-    if !args.no_resume {
-        finished.extend(read_rows(&points_path, spec));
         finished.extend(read_rows(&partial_path, spec));
-        finished.retain(|r| mine(r.index));
-        finished.sort_by_key(|r| r.index);
-        finished.dedup_by_key(|r| r.index);
     }
+    provenance.write(journal)?;
+    let mine = |index: usize| shard.is_none_or(|(i, n)| index % n == i);
+    finished.retain(|r| mine(r.index));
+    finished.sort_by_key(|r| r.index);
+    finished.dedup_by_key(|r| r.index);
     let todo: Vec<usize> = (0..spec.len())
         .filter(|&k| mine(k) && finished.binary_search_by_key(&k, |r| r.index).is_err())
         .collect();
@@ -232,12 +261,10 @@ fn compute(
             todo.len()
         );
     }
-    let fresh = args.no_resume || !partial_path.exists();
+    let fresh = !partial_path.exists();
     let mut partial = OpenOptions::new()
         .create(true)
-        .append(!args.no_resume)
-        .write(true)
-        .truncate(args.no_resume)
+        .append(true)
         .open(&partial_path)
         .with_context(|| format!("cannot write {}", partial_path.display()))?;
     if fresh {
@@ -260,6 +287,17 @@ fn compute(
     finished.extend(new);
     finished.sort_by_key(|r| r.index);
     Ok(finished)
+}
+
+/// Empties the journal folder (`--no-resume`).
+fn clear(journal: &Path) -> anyhow::Result<()> {
+    for entry in
+        std::fs::read_dir(journal).with_context(|| format!("cannot read {}", journal.display()))?
+    {
+        let path = entry?.path();
+        std::fs::remove_file(&path).with_context(|| format!("cannot remove {}", path.display()))?;
+    }
+    Ok(())
 }
 
 fn write_points(spec: &SweepSpec, results: &[PointResult], out_dir: &Path) -> anyhow::Result<()> {

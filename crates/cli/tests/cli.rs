@@ -194,23 +194,29 @@ fn sweep_shards_merge_and_resume_to_the_same_table() {
         .arg(&resumed_dir)
         .output()
         .expect("runs");
-    assert!(String::from_utf8_lossy(&result.stderr).contains("6 points already done, 6 to go"));
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(
+        stderr.contains("6 points already done, 6 to go"),
+        "{stderr}"
+    );
     let resumed = std::fs::read_to_string(resumed_dir.join("points.csv")).expect("csv");
     assert_eq!(resumed, whole, "resumed run differs from the whole run");
-    // A killed run leaves only its journal, possibly with a half-written last line.
+    // A killed run leaves only its journal beside the output folder, possibly
+    // with a half-written last line.
     let killed = dir.join("killed");
-    std::fs::create_dir_all(&killed).expect("dir");
+    let killed_journal = dir.join(".killed.journal");
+    std::fs::create_dir_all(&killed_journal).expect("dir");
     let journal: String = whole
         .lines()
         .take(1 + 5)
         .map(|l| format!("{l}\n"))
         .collect::<String>()
         + "1e4,1e1,tr";
-    std::fs::write(killed.join("points.partial.csv"), journal).expect("journal");
+    std::fs::write(killed_journal.join("points.partial.csv"), journal).expect("journal");
     // A run writes its provenance before its first point.
     std::fs::copy(
         dir.join("whole/provenance.json"),
-        killed.join("provenance.json"),
+        killed_journal.join("provenance.json"),
     )
     .expect("provenance");
     let result = fistage()
@@ -227,8 +233,58 @@ fn sweep_shards_merge_and_resume_to_the_same_table() {
         "run resumed from a journal differs from the whole run"
     );
     assert!(
-        !killed.join("points.partial.csv").exists(),
+        !killed.join("points.partial.csv").exists() && !killed_journal.exists(),
         "the journal is removed once the table is written"
+    );
+    // Another sweep's folder is refused (untouched) unless forced, and then
+    // replaced whole.
+    let other = dir.join("other.toml");
+    std::fs::write(
+        &other,
+        std::fs::read_to_string(&scenario)
+            .expect("scenario")
+            .replace("points = 3", "points = 2"),
+    )
+    .expect("write");
+    let into_whole = |scenario: &Path, extra: &[&str]| {
+        fistage()
+            .arg("sweep")
+            .arg(scenario)
+            .arg("--out")
+            .arg(dir.join("whole"))
+            .args(extra)
+            .output()
+            .expect("runs")
+    };
+    std::fs::write(dir.join("whole/notes.txt"), "mine").expect("write");
+    let refused = into_whole(&other, &[]);
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success());
+    assert!(
+        stderr.contains("made by another sweep") && stderr.contains("--force"),
+        "{stderr}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("whole/points.csv")).expect("csv"),
+        whole,
+        "a refused sweep changed the folder"
+    );
+    let recompute = into_whole(&scenario, &["--no-resume"]);
+    assert!(
+        !recompute.status.success(),
+        "--no-resume over a result needs --force"
+    );
+    let forced = into_whole(&other, &["--force"]);
+    assert!(
+        forced.status.success(),
+        "{}",
+        String::from_utf8_lossy(&forced.stderr)
+    );
+    let replaced = std::fs::read_to_string(dir.join("whole/points.csv")).expect("csv");
+    assert_eq!(replaced.lines().count(), 1 + 8);
+    assert!(
+        !dir.join("whole/notes.txt").exists(),
+        "a file of the earlier folder stayed beside the new result"
     );
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -167,7 +167,10 @@ pub(crate) fn drive<I: Integrating>(
     let model = system.model;
     let ends = segment_ends(system.excitation.breakpoints(), integrator.time(), t_end);
     let start = integrator.counts();
-    let used = |counts: StepCounts| counts.steps + counts.rejected - start.steps - start.rejected;
+    // Differences first: the totals may come from a restored state.
+    let used = |counts: StepCounts| {
+        (counts.steps - start.steps).saturating_add(counts.rejected - start.rejected)
+    };
     let mut pace = Pace::new(integrator.time());
     for (segment, &t_stop) in ends.iter().enumerate() {
         if segment > 0 {
