@@ -21,6 +21,25 @@ pub const CAPABILITIES: Capabilities = Capabilities {
     directional_derivatives: true,
 };
 
+/// Why a step failed, in the unit's terms: its step budget is per
+/// communication step and its tolerance comes from fmi2SetupExperiment, so
+/// the program's advice (raise solver.max_steps) does not apply here.
+fn step_failure_text(error: &fistage_sim::SimError) -> String {
+    use fistage_sim::SimError;
+    let budget = MAX_STEPS_PER_COMMUNICATION_STEP;
+    match error {
+        SimError::TooManySteps { t, steps } => format!(
+            "gave up at t = {t:.6} s after {steps} steps, the unit's limit per communication step ({budget}): the model is too stiff there for its parameters and state; check them, shorten the communication step, or loosen the tolerance"
+        ),
+        SimError::StepSizeCollapse {
+            t, h, projected, ..
+        } => format!(
+            "the step size collapsed to {h:.3e} s at t = {t:.6} s: at this pace the communication step needs about {projected:.3e} steps, more than four times the unit's limit ({budget}); check the parameters, or loosen the tolerance"
+        ),
+        other => other.to_string(),
+    }
+}
+
 /// The rules of fmi2SetupExperiment's arguments, which a restored FMU state
 /// obeys too: a finite start, a finite stop not before it, and a tolerance
 /// the program accepts.
@@ -569,7 +588,10 @@ impl Instance {
             Ok(()) => Ok(()),
             Err(error) => {
                 self.phase = Phase::StepFailed;
-                Err(CallError::Simulation(format!("fmi2DoStep failed: {error}")))
+                Err(CallError::Simulation(format!(
+                    "fmi2DoStep failed: {}",
+                    step_failure_text(&error)
+                )))
             }
         }
     }

@@ -17,6 +17,7 @@ use rand::{Rng, SeedableRng};
 
 use crate::exports::*;
 use crate::instance::{INJECT_PANIC, Instance};
+use crate::phase::Phase;
 use crate::types::{fmi2CallbackFunctions, fmi2CallbackLogger, fmi2Component, fmi2FMUstate};
 
 const OK: c_int = 0;
@@ -668,4 +669,30 @@ fn states_that_break_the_units_rules_are_refused_even_with_a_good_checksum() {
         );
     }
     unit.do_step(1e-3, 1e-3).expect("the unit still steps");
+}
+
+/// Found by the `fmu_state` fuzz target (a hang under its 10 s limit): a
+/// restored state with the table 5.6 km off makes the bristle dynamics so
+/// stiff that the explicit engine creeps (steps near 1e-10 s). The work is
+/// bounded by the unit's limit of steps per communication step, and the
+/// failure says so in the unit's terms; it used to advise raising
+/// solver.max_steps, a setting an importer cannot reach.
+#[test]
+fn a_hopelessly_stiff_step_stops_at_the_units_limit_and_says_so() {
+    let (uri, _) = resources("stiff");
+    let folder = PathBuf::from(uri.to_str().expect("URI").trim_start_matches("file://"));
+    let mut unit = Instance::new(&folder, None).expect("instance");
+    unit.setup_experiment(None, 0.0, None).expect("setup");
+    unit.enter_initialization().expect("enter");
+    unit.exit_initialization().expect("exit");
+    let mut far = unit.snapshot();
+    far.checkpoint.as_mut().expect("stepping").x[0] = 5632.0;
+    unit.restore(&far).expect("an admissible state");
+    let error = unit.do_step(0.0, 1e-3).expect_err("too stiff").to_string();
+    assert!(
+        error.contains("the unit's limit per communication step")
+            && !error.contains("solver.max_steps"),
+        "{error}"
+    );
+    assert_eq!(unit.phase(), Phase::StepFailed);
 }

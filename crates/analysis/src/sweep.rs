@@ -145,6 +145,10 @@ fn default_threshold() -> f64 {
 /// Parameter paths every model accepts, besides `overrides.<element>.<key>`.
 pub const PARAMETERS: [&str; 7] = fistage_model::parameter::GLOBAL_PATHS;
 
+/// Grid points a sweep may have (checked before anything is allocated): a
+/// million simulated points is already days of work.
+pub const MAX_GRID_POINTS: usize = 1_000_000;
+
 impl SweepSpec {
     /// Reads the scenario's `[sweep]` table.
     pub fn from_scenario(scenario: &Scenario) -> Result<Self, LoadError> {
@@ -178,6 +182,21 @@ impl SweepSpec {
                     format!("\"{}\" is swept twice", axis.parameter),
                 ));
             }
+        }
+        let points = spec
+            .axes
+            .iter()
+            .try_fold(1usize, |n, axis| n.checked_mul(axis.points))
+            .filter(|&n| n <= MAX_GRID_POINTS);
+        if points.is_none() {
+            let sizes: Vec<String> = spec.axes.iter().map(|a| a.points.to_string()).collect();
+            return Err(scenario.error(
+                "sweep.axis",
+                format!(
+                    "a grid of {} points; at most {MAX_GRID_POINTS} (split the study into several sweeps)",
+                    sizes.join(" x ")
+                ),
+            ));
         }
         if !(spec.oscillation_threshold.is_finite() && spec.oscillation_threshold >= 0.0) {
             return Err(scenario.error(

@@ -167,8 +167,25 @@ fn magnitude_response(
     Ok((response, name, phase_column.is_some()))
 }
 
+/// Data rows a table may hold: a recorded hour at 10 kHz is 3.6e7.
+pub const MAX_ROWS: usize = 50_000_000;
+/// Bytes a file may hold, checked before it is read.
+const MAX_FILE_BYTES: u64 = 4 << 30;
+
 fn read_file(path: &Path) -> Result<(String, String)> {
     let source = path.display().to_string();
+    if let Ok(metadata) = std::fs::metadata(path)
+        && metadata.len() > MAX_FILE_BYTES
+    {
+        return Err(IdentError::Csv {
+            file: source,
+            line: 0,
+            message: format!(
+                "the file holds {} bytes, more than the {MAX_FILE_BYTES} a data file may",
+                metadata.len()
+            ),
+        });
+    }
     match std::fs::read_to_string(path) {
         Ok(text) => Ok((source, text)),
         Err(e) => Err(IdentError::Io {
@@ -280,6 +297,13 @@ impl Table {
             let line = record.position().map_or(0, |p| p.line());
             if record.iter().all(str::is_empty) {
                 continue;
+            }
+            if records.len() == MAX_ROWS {
+                return Err(IdentError::Csv {
+                    file: source.to_string(),
+                    line,
+                    message: format!("more than {MAX_ROWS} data rows; thin or split the data"),
+                });
             }
             records.push((line, record));
         }
@@ -519,5 +543,18 @@ mod tests {
         let text = "velocity [mm/s]\tforce (N)\n2\t6.1\n";
         let data = parse_stribeck_csv("t.tsv", text, &UnitOverrides::default()).unwrap();
         assert_eq!((data.velocity[0], data.force[0]), (2e-3, 6.1));
+    }
+
+    /// A file too large to hold is refused from its size, before it is read
+    /// (a sparse file: nothing is written to disk).
+    #[test]
+    fn a_file_too_large_is_refused_before_it_is_read() {
+        let path = std::env::temp_dir().join(format!("fistage-huge-{}.csv", std::process::id()));
+        let file = std::fs::File::create(&path).unwrap();
+        file.set_len(MAX_FILE_BYTES + 1).unwrap();
+        let error = read_file(&path).unwrap_err().to_string();
+        let _ = std::fs::remove_file(&path);
+        assert!(error.contains("more than the 4294967296"), "{error}");
+        assert!(error.contains("fistage-huge-"), "{error}");
     }
 }
