@@ -27,10 +27,12 @@
 
 #![warn(missing_docs)]
 
+pub mod assess;
 pub mod eigen;
 pub mod lab;
 pub mod lyapunov;
 pub mod modes;
+pub mod robust;
 pub mod routh;
 pub mod sweep;
 

@@ -33,16 +33,11 @@
 //! (keeping f_s >= f_c).
 
 use std::path::Path;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
-use fistage_model::{EquilibriumKind, LoadError, Loaded, Parameter, RobotSpec, Scenario, assemble};
-use fistage_sim::{
-    Engine, Excitation, NativeEngine, ScenarioExcitation, SimSettings, initial_state,
-};
-use rayon::prelude::*;
+use fistage_model::{LoadError, Loaded, Parameter, RobotSpec, Scenario};
 use serde::Deserialize;
 
-use crate::modes::{Verdict, modal_analysis};
+use crate::assess::{Assessment, in_parallel};
 
 /// Grid spacing along an axis.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
@@ -96,26 +91,7 @@ impl Axis {
     }
 }
 
-/// Which analyses a sweep runs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Analyses {
-    /// Eigenvalues at the slipping equilibrium.
-    Linear,
-    /// Simulation from rest.
-    Simulation,
-    /// Both, and bistability.
-    Both,
-}
-
-impl Analyses {
-    fn linear(self) -> bool {
-        self != Self::Simulation
-    }
-    fn simulation(self) -> bool {
-        self != Self::Linear
-    }
-}
+pub use crate::assess::Analyses;
 
 /// A checked `[sweep]` table.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
@@ -230,6 +206,15 @@ impl SweepSpec {
         Ok(())
     }
 
+    /// What is computed at each point.
+    pub fn assessment(&self) -> Assessment {
+        Assessment {
+            analysis: self.analysis,
+            duration: self.duration,
+            oscillation_threshold: self.oscillation_threshold,
+        }
+    }
+
     /// Number of grid points.
     pub fn len(&self) -> usize {
         self.axes.iter().map(|a| a.points).product()
@@ -273,17 +258,7 @@ pub struct PointResult {
     pub bistable: Option<bool>,
 }
 
-/// Applies one sweep parameter to a scenario and its (unmodified) robot,
-/// through the model's parameter table (the same paths and rules as scenario
-/// overrides and FMU parameters).
-pub fn apply_parameter(
-    scenario: &mut Scenario,
-    robot: &mut RobotSpec,
-    parameter: &str,
-    value: f64,
-) -> Result<(), LoadError> {
-    Parameter::resolve(parameter, scenario, robot)?.write(scenario, robot, value)
-}
+pub use crate::assess::apply_parameter;
 
 /// The study at one grid point: the scenario with the point's parameters,
 /// assembled from the robot file as written.
@@ -293,94 +268,14 @@ pub fn variant(
     spec: &SweepSpec,
     index: usize,
 ) -> Result<Loaded, LoadError> {
-    let mut scenario = base.scenario.clone();
-    let mut robot = robot_file.clone();
-    for (axis, value) in spec.axes.iter().zip(spec.point(index)) {
-        apply_parameter(&mut scenario, &mut robot, &axis.parameter, value)?;
-    }
-    let (robot, model) = assemble(robot, &scenario)?;
-    Ok(Loaded {
-        scenario,
-        robot,
-        model,
-    })
-}
-
-/// Linear verdict at the slipping equilibrium: (stable, or `None` when the
-/// eigenvalues cannot back a verdict; largest real part).
-fn linear_verdict(loaded: &Loaded) -> Option<(Option<bool>, f64)> {
-    let scenario = &loaded.scenario;
-    let mut inputs = ScenarioExcitation::from_scenario(scenario).inputs(0.0);
-    inputs.platform_velocity = scenario.platform_velocity - scenario.reference.traverse_velocity();
-    inputs.reference = Default::default();
-    let analysis = modal_analysis(
-        &loaded.model,
-        &inputs,
-        EquilibriumKind::Slipping,
-        &loaded.model.zero_state(),
-    )
-    .ok()?;
-    let stable = match analysis.verdict {
-        Verdict::Stable => Some(true),
-        Verdict::Unstable => Some(false),
-        Verdict::Undetermined => None,
-    };
-    Some((stable, analysis.max_real_part))
-}
-
-/// Steady peak-to-peak of the controller's sensor over the last quarter of a
-/// run, and over the quarter before it.
-fn sensor_peak_to_peak(loaded: &Loaded, duration: f64) -> Option<(f64, f64)> {
-    let scenario = &loaded.scenario;
-    let model = &loaded.model;
-    let sensor = model.controller().map_or(0, |c| c.sensor);
-    model.sensors().get(sensor)?;
-    let excitation = ScenarioExcitation::from_scenario(scenario);
-    let settings = SimSettings {
-        t_end: duration,
-        sample_interval: (duration / 4000.0).min(1.0 / scenario.sample_rate),
-        ..SimSettings::from_scenario(scenario)
-    };
-    let x0 = initial_state(model, scenario).ok()?;
-    let trajectory = NativeEngine
-        .simulate(model, &x0, &excitation, &settings, &mut |_| {})
-        .ok()?;
-    let mut ws = model.workspace();
-    let p2p = |from: f64, to: f64, ws: &mut fistage_model::Workspace| {
-        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        for (k, &t) in trajectory.times.iter().enumerate() {
-            if t >= from && t <= to {
-                model.evaluate(trajectory.state(k), &excitation.inputs(t), ws);
-                let value =
-                    ws.elements.sensor_position[sensor] - excitation.inputs(t).reference.position;
-                lo = lo.min(value);
-                hi = hi.max(value);
-            }
-        }
-        hi - lo
-    };
-    Some((
-        p2p(0.75 * duration, duration, &mut ws),
-        p2p(0.5 * duration, 0.75 * duration, &mut ws),
-    ))
-}
-
-/// Simulated verdict: (no persistent oscillation, amplitude). A run that is
-/// still decaying (last-quarter peak-to-peak below 80% of the quarter before,
-/// but above the threshold) is run again twice as long, at most twice.
-fn simulated_verdict(loaded: &Loaded, spec: &SweepSpec) -> Option<(bool, f64)> {
-    let mut duration = spec.duration.unwrap_or(loaded.scenario.duration);
-    for extension in 0..3 {
-        let (last, before) = sensor_peak_to_peak(loaded, duration)?;
-        if last <= spec.oscillation_threshold {
-            return Some((true, last));
-        }
-        if last >= 0.8 * before || extension == 2 {
-            return Some((false, last));
-        }
-        duration *= 2.0;
-    }
-    None
+    let values = spec.point(index);
+    let assignments: Vec<(&str, f64)> = spec
+        .axes
+        .iter()
+        .zip(values)
+        .map(|(axis, value)| (axis.parameter.as_str(), value))
+        .collect();
+    crate::assess::study_with(base, robot_file, &assignments)
 }
 
 /// Evaluates one grid point.
@@ -391,34 +286,18 @@ pub fn evaluate_point(
     index: usize,
 ) -> PointResult {
     let parameters = spec.point(index);
-    let mut result = PointResult {
+    let outcome = variant(base, robot_file, spec, index)
+        .map(|loaded| spec.assessment().assess(&loaded))
+        .unwrap_or_default();
+    PointResult {
         index,
         parameters,
-        stable_linear: None,
-        stable_sim: None,
-        amplitude: None,
-        max_real_eig: None,
-        bistable: None,
-    };
-    let Ok(loaded) = variant(base, robot_file, spec, index) else {
-        return result;
-    };
-    if spec.analysis.linear()
-        && let Some((stable, max_real)) = linear_verdict(&loaded)
-    {
-        result.stable_linear = stable;
-        result.max_real_eig = Some(max_real);
+        stable_linear: outcome.stable_linear,
+        stable_sim: outcome.stable_sim,
+        amplitude: outcome.amplitude,
+        max_real_eig: outcome.max_real_eig,
+        bistable: outcome.bistable,
     }
-    if spec.analysis.simulation()
-        && let Some((stable, amplitude)) = simulated_verdict(&loaded, spec)
-    {
-        result.stable_sim = Some(stable);
-        result.amplitude = Some(amplitude);
-    }
-    if let (Some(linear), Some(simulated)) = (result.stable_linear, result.stable_sim) {
-        result.bistable = Some(linear && !simulated);
-    }
-    result
 }
 
 /// Evaluates the given grid points on `threads` threads; `done` is called with
@@ -431,25 +310,12 @@ pub fn run_points(
     threads: usize,
     done: &(dyn Fn(&PointResult, usize) + Sync),
 ) -> Vec<PointResult> {
-    let counter = AtomicUsize::new(0);
-    let work = || {
-        indices
-            .par_iter()
-            .map(|&index| {
-                let result = evaluate_point(base, robot_file, spec, index);
-                let finished = counter.fetch_add(1, Ordering::Relaxed) + 1;
-                done(&result, finished);
-                result
-            })
-            .collect::<Vec<_>>()
-    };
-    let mut results = match rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.max(1))
-        .build()
-    {
-        Ok(pool) => pool.install(work),
-        Err(_) => work(),
-    };
+    let mut results = in_parallel(
+        indices,
+        threads,
+        &|index| evaluate_point(base, robot_file, spec, index),
+        done,
+    );
     results.sort_by_key(|r| r.index);
     results
 }

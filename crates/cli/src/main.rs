@@ -16,6 +16,7 @@ mod output;
 mod progress;
 mod provenance;
 mod run;
+mod study;
 mod sweep;
 
 use clap::{Parser, Subcommand};

@@ -2,29 +2,19 @@
 //! scenario's `[sweep]` grid in parallel with a progress bar, write
 //! `points.csv` (a column per axis, then `stable_linear`, `stable_sim`,
 //! `amplitude`, `max_real_eig`, `bistable`), `points.json`, and a stability
-//! map. The result is staged in `.<name>.journal` beside the output folder and
-//! moved into place whole when complete. Finished points are appended to the
-//! journal's `points.partial.csv` as they come, so a killed sweep resumes
-//! where it stopped; so does a sweep into a folder holding points of the same
-//! sweep (another shard, say). A folder holding other work is replaced only
-//! with `--force`. `--shard i/n` computes every n-th point starting at i (for
-//! batch job arrays) and `--merge` joins shard folders.
+//! map. Journal, resume, shards and merge follow [`crate::study`].
 
-use std::fs::OpenOptions;
-use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
 
-use anyhow::{Context, bail};
+use anyhow::Context;
 use fistage_analysis::sweep::{
-    Analyses, PointResult, Spacing, SweepSpec, header, read_rows, row, run_points,
+    Analyses, PointResult, Spacing, SweepSpec, header, read_rows, row as row_text, run_points,
 };
 use fistage_model::RobotSpec;
 use fistage_plot::{ColourScale, Heatmap, Series, XyPlot, write_heatmap, write_xy};
 
-use crate::output::{OutputFolder, holds_files};
-use crate::progress;
 use crate::provenance::Provenance;
+use crate::study::{self, Study, StudyArgs};
 
 /// Arguments of `fistage sweep`.
 #[derive(clap::Args)]
@@ -34,34 +24,51 @@ pub struct SweepArgs {
     /// Output folder (default: out/<scenario>-sweep).
     #[arg(long, short)]
     pub out: Option<PathBuf>,
-    /// Compute only shard i of n (points i, i + n, i + 2n, ...), as "i/n".
-    #[arg(long)]
-    pub shard: Option<String>,
-    /// Merge the points of these shard folders instead of computing.
-    #[arg(long)]
-    pub merge: Vec<PathBuf>,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
-    pub threads: Option<usize>,
-    /// Recompute points already in the output folder or its journal.
-    #[arg(long)]
-    pub no_resume: bool,
-    /// Replace an output folder that holds other work (or, with --no-resume,
-    /// this sweep's points).
-    #[arg(long)]
-    pub force: bool,
+    /// Shards, merging, threads, resume.
+    #[command(flatten)]
+    pub study: StudyArgs,
 }
 
-fn parse_shard(text: &str) -> anyhow::Result<(usize, usize)> {
-    let parsed = text.split_once('/').and_then(|(i, n)| {
-        Some((
-            i.trim().parse::<usize>().ok()?,
-            n.trim().parse::<usize>().ok()?,
-        ))
-    });
-    match parsed {
-        Some((i, n)) if n > 0 && i < n => Ok((i, n)),
-        _ => bail!("--shard must be i/n with 0 <= i < n, got \"{text}\""),
+/// A sweep as a study of grid points.
+struct Grid<'a> {
+    loaded: &'a fistage_model::Loaded,
+    robot_file: &'a RobotSpec,
+    spec: &'a SweepSpec,
+}
+
+impl Study for Grid<'_> {
+    type Row = PointResult;
+    const TABLE: &'static str = "points.csv";
+    const ITEMS: &'static str = "points";
+    fn len(&self) -> usize {
+        self.spec.len()
+    }
+    fn header(&self) -> String {
+        header(self.spec)
+    }
+    fn row(&self, row: &PointResult) -> String {
+        row_text(row)
+    }
+    fn index(row: &PointResult) -> usize {
+        row.index
+    }
+    fn read_rows(&self, path: &Path) -> Vec<PointResult> {
+        read_rows(path, self.spec)
+    }
+    fn compute(
+        &self,
+        indices: &[usize],
+        threads: usize,
+        done: &(dyn Fn(&PointResult, usize) + Sync),
+    ) -> Vec<PointResult> {
+        run_points(
+            self.loaded,
+            self.robot_file,
+            self.spec,
+            indices,
+            threads,
+            done,
+        )
     }
 }
 
@@ -78,7 +85,6 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
             .map_or("sweep".into(), |s| s.to_string_lossy().into_owned());
         PathBuf::from("out").join(format!("{stem}-sweep"))
     });
-    let shard = args.shard.as_deref().map(parse_shard).transpose()?;
     let provenance = Provenance::of_sweep(
         &loaded.scenario.file,
         &loaded.scenario.robot,
@@ -87,32 +93,16 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
             "{:?}, duration {:?}, oscillation threshold {:?}",
             spec.analysis, spec.duration, spec.oscillation_threshold
         ),
-        shard,
+        args.study.shard()?,
     )?;
-    let (folder, results) = if args.merge.is_empty() {
-        let folder = OutputFolder::resumable(&out_dir)?;
-        let results = compute(
-            args,
-            &loaded,
-            &robot_file,
-            &spec,
-            shard,
-            &folder,
-            &out_dir,
-            &provenance,
-        )?;
-        (folder, results)
-    } else {
-        let folder = OutputFolder::begin(&out_dir, args.force)?;
-        let all = merge(&args.merge, &spec, &provenance)?;
-        Provenance {
-            shard: "merged".into(),
-            ..provenance
-        }
-        .write(folder.path())?;
-        (folder, all)
+    let grid = Grid {
+        loaded: &loaded,
+        robot_file: &robot_file,
+        spec: &spec,
     };
-    write_points(&spec, &results, folder.path())?;
+    let (folder, results) = study::gather(&grid, &args.study, &out_dir, &provenance)?;
+    study::write_table(&grid, &results, &folder)?;
+    write_json(&spec, &results, folder.path())?;
     let pictures = draw(
         &crate::figures::figure_title(&loaded),
         &spec,
@@ -141,173 +131,7 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The points of shard folders made by this very sweep: each must carry the
-/// same provenance, no shard may come twice, all must split the grid alike,
-/// and no row may hold a non-finite number.
-fn merge(
-    folders: &[PathBuf],
-    spec: &SweepSpec,
-    provenance: &Provenance,
-) -> anyhow::Result<Vec<PointResult>> {
-    let mut all: Vec<PointResult> = Vec::new();
-    let mut shards: Vec<String> = Vec::new();
-    for dir in folders {
-        let theirs = provenance.check_folder(dir, "merge only shards of this sweep")?;
-        if shards.contains(&theirs.shard) {
-            bail!("{}: shard {} is given twice", dir.display(), theirs.shard);
-        }
-        let parts = |s: &str| s.split_once('/').map(|(_, n)| n.to_string());
-        if let Some(first) = shards.first()
-            && parts(first) != parts(&theirs.shard)
-        {
-            bail!(
-                "{}: shard {} splits the grid otherwise than shard {first}",
-                dir.display(),
-                theirs.shard
-            );
-        }
-        shards.push(theirs.shard.clone());
-        let points = dir.join("points.csv");
-        refuse_non_finite_rows(&points)?;
-        let rows = read_rows(&points, spec);
-        anyhow::ensure!(
-            !rows.is_empty(),
-            "{}: no points of this sweep",
-            points.display()
-        );
-        all.extend(rows);
-    }
-    all.sort_by_key(|r| r.index);
-    all.dedup_by_key(|r| r.index);
-    Ok(all)
-}
-
-/// A row with a NaN or infinite cell is damaged work: refuse it, naming it.
-fn refuse_non_finite_rows(points: &Path) -> anyhow::Result<()> {
-    let text = std::fs::read_to_string(points)
-        .with_context(|| format!("cannot read {}", points.display()))?;
-    for (line, row) in text.lines().enumerate().skip(1) {
-        if row
-            .split(',')
-            .any(|cell| cell.parse::<f64>().is_ok_and(|v| !v.is_finite()))
-        {
-            bail!(
-                "{}: line {}: a non-finite number ({row}); not merged",
-                points.display(),
-                line + 1
-            );
-        }
-    }
-    Ok(())
-}
-
-/// The points of the sweep (or shard): those already in the output folder
-/// (when it holds this sweep) and in the journal, then the rest, computed
-/// with every finished one appended to the journal as it comes.
-#[allow(clippy::too_many_arguments)]
-fn compute(
-    args: &SweepArgs,
-    loaded: &fistage_model::Loaded,
-    robot_file: &RobotSpec,
-    spec: &SweepSpec,
-    shard: Option<(usize, usize)>,
-    folder: &OutputFolder,
-    out_dir: &Path,
-    provenance: &Provenance,
-) -> anyhow::Result<Vec<PointResult>> {
-    let mut finished: Vec<PointResult> = Vec::new();
-    if holds_files(out_dir) {
-        let earlier = provenance.check_folder(
-            out_dir,
-            "give --force to replace it, or choose another --out",
-        );
-        match (earlier, args.force, args.no_resume) {
-            (_, true, _) => {}
-            (Ok(_), false, false) => {
-                // Points of any shard of the same sweep are points of this one.
-                finished.extend(read_rows(&out_dir.join("points.csv"), spec));
-                finished.extend(read_rows(&out_dir.join("points.partial.csv"), spec));
-            }
-            (Ok(_), false, true) => bail!(
-                "{}: holds points of this sweep; give --force with --no-resume to recompute them",
-                out_dir.display()
-            ),
-            (Err(refused), false, _) => return Err(refused),
-        }
-    }
-    let journal = folder.path();
-    let partial_path = journal.join("points.partial.csv");
-    if args.no_resume {
-        clear(journal)?;
-    } else if partial_path.exists() {
-        provenance.check_folder(
-            journal,
-            "resume only the same sweep (--no-resume starts over, or choose another --out)",
-        )?;
-        finished.extend(read_rows(&partial_path, spec));
-    }
-    provenance.write(journal)?;
-    let mine = |index: usize| shard.is_none_or(|(i, n)| index % n == i);
-    finished.retain(|r| mine(r.index));
-    finished.sort_by_key(|r| r.index);
-    finished.dedup_by_key(|r| r.index);
-    let todo: Vec<usize> = (0..spec.len())
-        .filter(|&k| mine(k) && finished.binary_search_by_key(&k, |r| r.index).is_err())
-        .collect();
-    if !finished.is_empty() {
-        eprintln!(
-            "resuming: {} points already done, {} to go",
-            finished.len(),
-            todo.len()
-        );
-    }
-    let fresh = !partial_path.exists();
-    let mut partial = OpenOptions::new()
-        .create(true)
-        .append(true)
-        .open(&partial_path)
-        .with_context(|| format!("cannot write {}", partial_path.display()))?;
-    if fresh {
-        writeln!(partial, "{}", header(spec))?;
-    }
-    let partial = Mutex::new(partial);
-    let bar = progress::bar(&format!("sweep {} points", todo.len()));
-    let total = todo.len().max(1);
-    let threads = args
-        .threads
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let new = run_points(loaded, robot_file, spec, &todo, threads, &|result, done| {
-        if let Ok(mut file) = partial.lock() {
-            // A failed write only costs the resume of this point.
-            let _ = writeln!(file, "{}", row(result)).and_then(|_| file.flush());
-        }
-        progress::set_fraction(&bar, done as f64 / total as f64);
-    });
-    bar.finish_and_clear();
-    finished.extend(new);
-    finished.sort_by_key(|r| r.index);
-    Ok(finished)
-}
-
-/// Empties the journal folder (`--no-resume`).
-fn clear(journal: &Path) -> anyhow::Result<()> {
-    for entry in
-        std::fs::read_dir(journal).with_context(|| format!("cannot read {}", journal.display()))?
-    {
-        let path = entry?.path();
-        std::fs::remove_file(&path).with_context(|| format!("cannot remove {}", path.display()))?;
-    }
-    Ok(())
-}
-
-fn write_points(spec: &SweepSpec, results: &[PointResult], out_dir: &Path) -> anyhow::Result<()> {
-    let mut text = header(spec) + "\n";
-    for result in results {
-        text.push_str(&row(result));
-        text.push('\n');
-    }
-    let path = out_dir.join("points.csv");
-    std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?;
+fn write_json(spec: &SweepSpec, results: &[PointResult], out_dir: &Path) -> anyhow::Result<()> {
     let json: Vec<serde_json::Value> = results
         .iter()
         .map(|r| {
@@ -326,8 +150,6 @@ fn write_points(spec: &SweepSpec, results: &[PointResult], out_dir: &Path) -> an
     let json_path = out_dir.join("points.json");
     std::fs::write(&json_path, serde_json::to_string_pretty(&json)? + "\n")
         .with_context(|| format!("cannot write {}", json_path.display()))?;
-    // The partial file is only a journal; the finished table replaces it.
-    let _ = std::fs::remove_file(out_dir.join("points.partial.csv"));
     Ok(())
 }
 

@@ -68,6 +68,8 @@ struct ScenarioFile {
     statistics: StatisticsFile,
     /// Parameter sweeps are read by the analysis crate; kept as raw TOML here.
     sweep: Option<toml::Value>,
+    /// Tolerance analyses likewise.
+    robust: Option<toml::Value>,
 }
 
 fn default_gravity() -> [f64; 3] {
@@ -465,6 +467,8 @@ pub struct Scenario {
     pub window: [f64; 2],
     /// The raw `[sweep]` table, when present.
     pub sweep: Option<toml::Value>,
+    /// The raw `[robust]` table (a tolerance analysis), when present.
+    pub robust: Option<toml::Value>,
 }
 
 impl Scenario {
@@ -582,6 +586,7 @@ impl Scenario {
             signals: raw.output.signals,
             window,
             sweep: raw.sweep,
+            robust: raw.robust,
         })
     }
 

@@ -1,0 +1,229 @@
+//! What a study computes at one point of its parameter space (a sweep's grid
+//! point, a tolerance analysis's sample): the scenario with the point's
+//! parameter values, assembled from the robot file as written, then the
+//! linear verdict (eigenvalues at the slipping equilibrium), the simulated
+//! verdict (persistent oscillation of the tracking error from rest), the
+//! oscillation amplitude and bistability (a stable equilibrium beside a limit
+//! cycle).
+
+use fistage_model::{EquilibriumKind, LoadError, Loaded, Parameter, RobotSpec, Scenario, assemble};
+use fistage_sim::{
+    Engine, Excitation, NativeEngine, ScenarioExcitation, SimSettings, initial_state,
+};
+use rayon::prelude::*;
+use serde::Deserialize;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use crate::modes::{Verdict, modal_analysis};
+
+/// Which analyses a study runs at each point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Analyses {
+    /// Eigenvalues at the slipping equilibrium.
+    Linear,
+    /// Simulation from rest.
+    Simulation,
+    /// Both, and bistability.
+    Both,
+}
+
+impl Analyses {
+    /// Whether the eigenvalues are computed.
+    pub fn linear(self) -> bool {
+        self != Self::Simulation
+    }
+    /// Whether the stage is simulated.
+    pub fn simulation(self) -> bool {
+        self != Self::Linear
+    }
+}
+
+/// What is computed at each point, and how.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Assessment {
+    /// Analyses to run.
+    pub analysis: Analyses,
+    /// Simulated time per point, s (default: the scenario's duration).
+    pub duration: Option<f64>,
+    /// Steady peak-to-peak of the tracking error above which a run oscillates, m.
+    pub oscillation_threshold: f64,
+}
+
+/// What one point gave; `None` where an analysis was not run or could not
+/// give an answer (an undetermined linear verdict, a failed simulation).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Outcome {
+    /// Slipping equilibrium linearly stable.
+    pub stable_linear: Option<bool>,
+    /// Largest real part of the non-neutral eigenvalues, 1/s.
+    pub max_real_eig: Option<f64>,
+    /// No persistent oscillation in simulation from rest.
+    pub stable_sim: Option<bool>,
+    /// Steady peak-to-peak of the tracking error, m.
+    pub amplitude: Option<f64>,
+    /// Stable equilibrium beside a limit cycle (linear stable, simulation oscillates).
+    pub bistable: Option<bool>,
+}
+
+impl Assessment {
+    /// The analyses at one point.
+    pub fn assess(&self, loaded: &Loaded) -> Outcome {
+        let mut outcome = Outcome::default();
+        if self.analysis.linear()
+            && let Some((stable, max_real)) = linear_verdict(loaded)
+        {
+            outcome.stable_linear = stable;
+            outcome.max_real_eig = Some(max_real);
+        }
+        if self.analysis.simulation()
+            && let Some((stable, amplitude)) = simulated_verdict(loaded, self)
+        {
+            outcome.stable_sim = Some(stable);
+            outcome.amplitude = Some(amplitude);
+        }
+        if let (Some(linear), Some(simulated)) = (outcome.stable_linear, outcome.stable_sim) {
+            outcome.bistable = Some(linear && !simulated);
+        }
+        outcome
+    }
+}
+
+/// Evaluates `evaluate(index)` for every index on `threads` threads, in
+/// index order; `done` is called with each result as it finishes (from
+/// worker threads, in completion order) and the count finished so far.
+pub fn in_parallel<T: Send>(
+    indices: &[usize],
+    threads: usize,
+    evaluate: &(dyn Fn(usize) -> T + Sync),
+    done: &(dyn Fn(&T, usize) + Sync),
+) -> Vec<T> {
+    let counter = AtomicUsize::new(0);
+    let work = || {
+        indices
+            .par_iter()
+            .map(|&index| {
+                let result = evaluate(index);
+                let finished = counter.fetch_add(1, Ordering::Relaxed) + 1;
+                done(&result, finished);
+                result
+            })
+            .collect::<Vec<_>>()
+    };
+    match rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.max(1))
+        .build()
+    {
+        Ok(pool) => pool.install(work),
+        Err(_) => work(),
+    }
+}
+
+/// Applies one parameter (a path of the parameter table) to a scenario and
+/// its (unmodified) robot, with the same paths and rules as scenario
+/// overrides and FMU parameters.
+pub fn apply_parameter(
+    scenario: &mut Scenario,
+    robot: &mut RobotSpec,
+    parameter: &str,
+    value: f64,
+) -> Result<(), LoadError> {
+    Parameter::resolve(parameter, scenario, robot)?.write(scenario, robot, value)
+}
+
+/// The study with these parameter values: the base scenario and the robot
+/// file as written, each value applied in turn, then assembled.
+pub fn study_with(
+    base: &Loaded,
+    robot_file: &RobotSpec,
+    assignments: &[(&str, f64)],
+) -> Result<Loaded, LoadError> {
+    let mut scenario = base.scenario.clone();
+    let mut robot = robot_file.clone();
+    for &(parameter, value) in assignments {
+        apply_parameter(&mut scenario, &mut robot, parameter, value)?;
+    }
+    let (robot, model) = assemble(robot, &scenario)?;
+    Ok(Loaded {
+        scenario,
+        robot,
+        model,
+    })
+}
+
+/// Linear verdict at the slipping equilibrium: (stable, or `None` when the
+/// eigenvalues cannot back a verdict; largest real part).
+fn linear_verdict(loaded: &Loaded) -> Option<(Option<bool>, f64)> {
+    let scenario = &loaded.scenario;
+    let mut inputs = ScenarioExcitation::from_scenario(scenario).inputs(0.0);
+    inputs.platform_velocity = scenario.platform_velocity - scenario.reference.traverse_velocity();
+    inputs.reference = Default::default();
+    let analysis = modal_analysis(
+        &loaded.model,
+        &inputs,
+        EquilibriumKind::Slipping,
+        &loaded.model.zero_state(),
+    )
+    .ok()?;
+    let stable = match analysis.verdict {
+        Verdict::Stable => Some(true),
+        Verdict::Unstable => Some(false),
+        Verdict::Undetermined => None,
+    };
+    Some((stable, analysis.max_real_part))
+}
+
+/// Steady peak-to-peak of the controller's sensor over the last quarter of a
+/// run, and over the quarter before it.
+fn sensor_peak_to_peak(loaded: &Loaded, duration: f64) -> Option<(f64, f64)> {
+    let scenario = &loaded.scenario;
+    let model = &loaded.model;
+    let sensor = model.controller().map_or(0, |c| c.sensor);
+    model.sensors().get(sensor)?;
+    let excitation = ScenarioExcitation::from_scenario(scenario);
+    let settings = SimSettings {
+        t_end: duration,
+        sample_interval: (duration / 4000.0).min(1.0 / scenario.sample_rate),
+        ..SimSettings::from_scenario(scenario)
+    };
+    let x0 = initial_state(model, scenario).ok()?;
+    let trajectory = NativeEngine
+        .simulate(model, &x0, &excitation, &settings, &mut |_| {})
+        .ok()?;
+    let mut ws = model.workspace();
+    let p2p = |from: f64, to: f64, ws: &mut fistage_model::Workspace| {
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for (k, &t) in trajectory.times.iter().enumerate() {
+            if t >= from && t <= to {
+                model.evaluate(trajectory.state(k), &excitation.inputs(t), ws);
+                let value =
+                    ws.elements.sensor_position[sensor] - excitation.inputs(t).reference.position;
+                lo = lo.min(value);
+                hi = hi.max(value);
+            }
+        }
+        hi - lo
+    };
+    Some((
+        p2p(0.75 * duration, duration, &mut ws),
+        p2p(0.5 * duration, 0.75 * duration, &mut ws),
+    ))
+}
+
+/// Simulated verdict: (no persistent oscillation, amplitude). A run that is
+/// still decaying (last-quarter peak-to-peak below 80% of the quarter before,
+/// but above the threshold) is run again twice as long, at most twice.
+fn simulated_verdict(loaded: &Loaded, assessment: &Assessment) -> Option<(bool, f64)> {
+    let mut duration = assessment.duration.unwrap_or(loaded.scenario.duration);
+    for extension in 0..3 {
+        let (last, before) = sensor_peak_to_peak(loaded, duration)?;
+        if last <= assessment.oscillation_threshold {
+            return Some((true, last));
+        }
+        if last >= 0.8 * before || extension == 2 {
+            return Some((false, last));
+        }
+        duration *= 2.0;
+    }
+    None
+}
