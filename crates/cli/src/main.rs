@@ -15,6 +15,7 @@ mod modes;
 mod output;
 mod progress;
 mod provenance;
+mod robust;
 mod run;
 mod study;
 mod sweep;
@@ -44,6 +45,8 @@ enum Command {
     Modes(modes::ModesArgs),
     /// Stability over a grid of one or two parameters (points.csv, points.json, map).
     Sweep(sweep::SweepArgs),
+    /// Tolerance analysis of a population of stages (samples.csv, summary.json, plots).
+    Robust(robust::RobustArgs),
     /// Largest Lyapunov exponent: limit cycle (about 0) or chaos (positive).
     Lyapunov(lyapunov::LyapunovArgs),
     /// Identify LuGre parameters from measured stage data.
@@ -68,6 +71,7 @@ fn main() -> anyhow::Result<()> {
         Command::Check(args) => check::run(&args),
         Command::Modes(args) => modes::run(&args),
         Command::Sweep(args) => sweep::run(&args),
+        Command::Robust(args) => robust::run(&args),
         Command::Lyapunov(args) => lyapunov::run(&args),
         Command::Fmu(args) => fmu::run(&args),
     }

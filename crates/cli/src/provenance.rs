@@ -1,5 +1,5 @@
-//! Where a piece of work came from: every sweep folder (a whole run, a shard,
-//! a resumed journal) holds `provenance.json` with the items that decide its
+//! Where a piece of work came from: every study folder (a sweep's or a
+//! tolerance analysis's whole run, shard or resumed journal) holds `provenance.json` with the items that decide its
 //! numbers: the program version, the scenario and robot file contents, the
 //! grid and the analysis settings, plus which shard it is. Merging and
 //! resuming compare them item by item and refuse pieces that differ, naming
@@ -11,7 +11,7 @@ use std::path::Path;
 use anyhow::{Context, bail};
 use serde::{Deserialize, Serialize};
 
-/// The file in every sweep folder.
+/// The file in every study folder.
 pub const FILE: &str = "provenance.json";
 
 /// What produced a piece of work.
@@ -33,9 +33,11 @@ fn content_hash(bytes: &[u8]) -> String {
 }
 
 impl Provenance {
-    /// The provenance of a sweep of `scenario_file` with this grid and these
-    /// analysis settings (their debug form), as shard `shard`.
-    pub fn of_sweep(
+    /// The provenance of a study of kind `study` (`sweep`, `robust`) of
+    /// `scenario_file` with this grid (or design) and these analysis
+    /// settings (their debug form), as shard `shard`.
+    pub fn of_study(
+        study: &str,
         scenario_file: &Path,
         robot_file: &Path,
         grid: &str,
@@ -55,6 +57,7 @@ impl Provenance {
             content_hash(&read(scenario_file)?),
         );
         items.insert("robot file".to_string(), content_hash(&read(robot_file)?));
+        items.insert("study".to_string(), study.to_string());
         items.insert("grid".to_string(), grid.to_string());
         items.insert("analysis settings".to_string(), analysis.to_string());
         Ok(Self {
@@ -125,6 +128,7 @@ mod tests {
 
     fn sample(grid: &str) -> Provenance {
         let mut items = BTreeMap::new();
+        items.insert("study".to_string(), study.to_string());
         items.insert("grid".to_string(), grid.to_string());
         items.insert("program".to_string(), "fistage 0".to_string());
         Provenance {

@@ -85,7 +85,8 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
             .map_or("sweep".into(), |s| s.to_string_lossy().into_owned());
         PathBuf::from("out").join(format!("{stem}-sweep"))
     });
-    let provenance = Provenance::of_sweep(
+    let provenance = Provenance::of_study(
+        "sweep",
         &loaded.scenario.file,
         &loaded.scenario.robot,
         &format!("{:?}", spec.axes),

@@ -289,6 +289,125 @@ fn sweep_shards_merge_and_resume_to_the_same_table() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A tolerance analysis: two shards merged, and a run resumed from its
+/// journal, give the unsharded samples.csv byte for byte; summary.json holds
+/// the probability with its interval; a sweep's folder is refused.
+#[test]
+fn robust_shards_merge_and_resume_to_the_same_table() {
+    let dir = scratch("robust");
+    std::fs::create_dir_all(&dir).expect("dir");
+    let scenario = dir.join("robust.toml");
+    std::fs::write(
+        &scenario,
+        format!(
+            "robot = {:?}\nduration = 0.5\n[platform]\nvelocity = 0.02\n[controller]\nsensor = \"encoder\"\nactuator = \"drive\"\nk = 1e5\nc = 36\n\
+             [robust]\nsamples = 64\nseed = 5\n[[robust.parameter]]\nparameter = \"controller.c\"\ndistribution = \"lognormal\"\nsd = 0.3\n\
+             [[robust.parameter]]\nparameter = \"overrides.bearing_friction.sigma0\"\ndistribution = \"uniform\"\nhalf_width = 0.2\n",
+            repository().join("robots/stage_1dof_rigid.urdf").display().to_string()
+        ),
+    )
+    .expect("write");
+    let robust = |extra: &[&str], out: &Path| {
+        let result = fistage()
+            .arg("robust")
+            .arg(&scenario)
+            .arg("--out")
+            .arg(out)
+            .args(extra)
+            .output()
+            .expect("runs");
+        assert!(
+            result.status.success(),
+            "{}",
+            String::from_utf8_lossy(&result.stderr)
+        );
+        std::fs::read_to_string(out.join("samples.csv")).expect("samples.csv")
+    };
+    let whole = robust(&[], &dir.join("whole"));
+    assert_eq!(whole.lines().count(), 1 + 64);
+    assert!(whole.starts_with(
+        "sample,controller.c,overrides.bearing_friction.sigma0,stable_linear,max_real_eig,"
+    ));
+    let summary: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("whole/summary.json")).expect("summary"),
+    )
+    .expect("JSON");
+    let p = &summary["p_unstable_linear"];
+    let (estimate, lo, hi) = (
+        p["estimate"].as_f64().expect("estimate"),
+        p["ci95"][0].as_f64().expect("lo"),
+        p["ci95"][1].as_f64().expect("hi"),
+    );
+    assert!(lo < estimate && estimate < hi && p["n"] == 64, "{p}");
+    assert!(
+        estimate > 0.0 && estimate < 1.0,
+        "both verdicts appear: {p}"
+    );
+    assert_eq!(summary["sensitivity"][0]["parameter"], "controller.c");
+    for plot in [
+        "max_real_eig_histogram.svg",
+        "probability_by_parameter.svg",
+        "sensitivity.svg",
+    ] {
+        assert!(dir.join("whole").join(plot).is_file(), "{plot}");
+    }
+    robust(&["--shard", "0/2"], &dir.join("s0"));
+    robust(&["--shard", "1/2"], &dir.join("s1"));
+    let merged = robust(
+        &[
+            "--merge",
+            dir.join("s0").to_str().expect("path"),
+            "--merge",
+            dir.join("s1").to_str().expect("path"),
+        ],
+        &dir.join("merged"),
+    );
+    assert_eq!(merged, whole, "merged shards differ from the whole run");
+    // A killed run leaves its journal beside the output folder.
+    let journal = dir.join(".killed.journal");
+    std::fs::create_dir_all(&journal).expect("journal");
+    let rows: String = whole
+        .lines()
+        .take(1 + 20)
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(journal.join("samples.partial.csv"), rows).expect("rows");
+    std::fs::copy(
+        dir.join("whole/provenance.json"),
+        journal.join("provenance.json"),
+    )
+    .expect("provenance");
+    let result = fistage()
+        .arg("robust")
+        .arg(&scenario)
+        .arg("--out")
+        .arg(dir.join("killed"))
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(
+        stderr.contains("20 samples already done, 44 to go"),
+        "{stderr}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("killed/samples.csv")).expect("csv"),
+        whole
+    );
+    // Other seeds are other work: refused in the folder, unless forced.
+    let refused = fistage()
+        .arg("robust")
+        .arg(&scenario)
+        .arg("--seed")
+        .arg("6")
+        .arg("--out")
+        .arg(dir.join("whole"))
+        .output()
+        .expect("runs");
+    assert!(!refused.status.success());
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("grid"));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// `fistage fmu` writes an archive with the description, the library and the
 /// resources; a bad scenario or a missing library is an error that names it.
 #[test]

@@ -11,9 +11,11 @@
 //! | `lognormal` | nominal exp(sd z) (sd of ln X) | median exp(sd z) |
 //! | `truncnormal` | nominal (1 + e), e ~ N(0, sd) within [low, high] | N(mean, sd) within [low, high] |
 //!
-//! with z = Phi^-1(u). Each distribution also knows its support, so a draw
-//! the parameter's rule refuses (a negative stiffness from a wide normal) is
-//! found when the study is read, not at sample 3 817.
+//! with z = Phi^-1(u). Each distribution also knows the values it can
+//! actually give (every design draws u within [2^-54, 1 - 2^-54], so |z| stays
+//! below 8.3), so a draw the parameter's rule refuses (a negative stiffness
+//! from a wide normal) is found when the study is read, not at sample 3 817,
+//! while a normal 5% spread of a positive parameter is accepted.
 
 use fistage_model::rule::Rule;
 use statrs::distribution::{ContinuousCDF, Normal};
@@ -67,6 +69,14 @@ pub struct Support {
     pub low_open: bool,
 }
 
+/// The smallest u any design draws (and 1 - u the largest).
+pub const SMALLEST_U: f64 = 1.0 / (1u64 << 54) as f64;
+
+/// The largest |z| a draw can reach.
+fn z_reach() -> f64 {
+    -standard_normal().inverse_cdf(SMALLEST_U)
+}
+
 fn standard_normal() -> Normal {
     // Mean 0 and standard deviation 1 are valid arguments.
     Normal::standard()
@@ -93,7 +103,7 @@ impl Distribution {
         }
     }
 
-    /// The values it can give.
+    /// The values it can give (with u in [SMALLEST_U, 1 - SMALLEST_U]).
     pub fn support(&self) -> Support {
         let closed = |low, high| Support {
             low,
@@ -102,7 +112,7 @@ impl Distribution {
         };
         match *self {
             Self::Uniform { low, high } => closed(low, high),
-            Self::Normal { .. } => closed(f64::NEG_INFINITY, f64::INFINITY),
+            Self::Normal { mean, sd } => closed(mean - sd * z_reach(), mean + sd * z_reach()),
             Self::TruncNormal { low, high, .. } => closed(low, high),
             Self::LogNormal { median, .. } if median < 0.0 => Support {
                 low: f64::NEG_INFINITY,
@@ -137,11 +147,11 @@ impl Distribution {
             if v.is_infinite() {
                 format!("{}inf", if v < 0.0 { "-" } else { "" })
             } else {
-                format!("{v:e}")
+                format!("{v:.4e}")
             }
         };
         Err(format!(
-            "can draw values from {} to {}, but the parameter must be {}",
+            "can draw values from {} to {}, but the parameter must be {} (a narrower spread, or truncnormal with low and high, or lognormal)",
             ends(low),
             ends(high),
             rule.requirement()
@@ -196,13 +206,21 @@ mod tests {
 
     #[test]
     fn a_support_the_rule_refuses_is_named() {
-        let normal = Distribution::Normal { mean: 1.0, sd: 0.1 };
-        assert!(normal.check_support(Rule::Finite).is_ok());
-        let message = normal.check_support(Rule::Positive).unwrap_err();
+        // A 5% normal spread of a positive value never reaches zero (8.3 sd
+        // away); a 20% one can.
+        let narrow = Distribution::Normal {
+            mean: 1.0,
+            sd: 0.05,
+        };
+        assert!(narrow.check_support(Rule::Positive).is_ok());
+        let wide = Distribution::Normal { mean: 1.0, sd: 0.2 };
+        assert!(wide.check_support(Rule::Finite).is_ok());
+        let message = wide.check_support(Rule::Positive).unwrap_err();
         assert!(
-            message.contains("-inf") && message.contains("> 0"),
+            message.contains("-6.5") && message.contains("> 0"),
             "{message}"
         );
+        assert!((z_reach() - 8.29).abs() < 0.01, "{}", z_reach());
         let lognormal = Distribution::LogNormal {
             median: 1.0,
             sd: 2.0,

@@ -1,0 +1,229 @@
+//! Tolerance analysis against answers known without it:
+//!
+//! * a closed-form probability: the rigid PD stage with only its damping gain
+//!   toleranced (uniform) is unstable exactly below the Routh-Hurwitz
+//!   boundary c*, found from the paper's analytic conditions (not from the
+//!   eigenvalues the study uses), so P(unstable) = (c* - low) / (high - low);
+//!   plain Monte Carlo lands inside its own Wilson interval, and scrambled
+//!   Sobol converges as 1/n (one sample per stratum in one dimension);
+//! * samples are functions of (seed, index): the same seed gives the same
+//!   rows, any split into shards recombines into the single run;
+//! * patterns draw every match independently, or once for all with
+//!   `shared = true`; nonsense tables are errors naming the key.
+
+use std::path::{Path, PathBuf};
+
+use fistage_analysis::robust::{RobustSpec, Summary};
+use fistage_analysis::routh::{RigidStage, rigid_slipping};
+use fistage_model::{Loaded, RobotSpec, Scenario, assemble};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// A study of `robot` with the rigid stage's servo at k = 1e5 over a
+/// platform at 20 mm/s, and this `[robust]` table.
+fn study(robot: &str, robust: &str) -> (Loaded, RobotSpec, Scenario) {
+    let text = format!(
+        "robot = {:?}\nduration = 1.0\n[platform]\nvelocity = 0.02\n[controller]\nsensor = \"encoder\"\nactuator = \"drive\"\nk = 1e5\nc = 250\n{robust}",
+        root().join(robot).display().to_string()
+    );
+    let scenario = Scenario::from_str(&text, Path::new("robust.toml")).expect("scenario");
+    let robot_file = RobotSpec::from_file(&scenario.robot).expect("robot");
+    let (robot, model) = assemble(robot_file.clone(), &scenario).expect("model");
+    let loaded = Loaded {
+        scenario: scenario.clone(),
+        robot,
+        model,
+    };
+    (loaded, robot_file, scenario)
+}
+
+/// The damping gain where the rigid stage's slipping equilibrium changes
+/// stability, by bisection of the analytic Routh-Hurwitz conditions.
+fn routh_boundary(loaded: &Loaded) -> f64 {
+    let model = &loaded.model;
+    let stage = |c: f64| RigidStage {
+        mass: model.bodies()[0].mass,
+        k: 1e5,
+        c,
+        lugre: model.frictions()[0].lugre,
+        platform_velocity: 0.02,
+    };
+    let stable = |c: f64| rigid_slipping(&stage(c)).stable;
+    let (mut lo, mut hi) = (1.0, 2000.0);
+    assert!(!stable(lo) && stable(hi), "one boundary in the bracket");
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if stable(mid) { hi = mid } else { lo = mid }
+    }
+    0.5 * (lo + hi)
+}
+
+fn damping_table(samples: usize, sampling: &str, low: f64, high: f64) -> String {
+    format!(
+        "[robust]\nsamples = {samples}\nseed = 3\nsampling = \"{sampling}\"\n[[robust.parameter]]\nparameter = \"controller.c\"\ndistribution = \"uniform\"\nrelative = false\nlow = {low:?}\nhigh = {high:?}\n"
+    )
+}
+
+fn p_unstable(robust: &str) -> (f64, [f64; 2]) {
+    let (loaded, robot_file, scenario) = study("robots/stage_1dof_rigid.urdf", robust);
+    let spec = RobustSpec::from_scenario(&scenario, &robot_file, None, None).expect("spec");
+    let indices: Vec<usize> = (0..spec.samples).collect();
+    let results = spec.run(&loaded, &robot_file, &indices, 2, &|_, _| {});
+    let summary = Summary::of(&spec, &results);
+    assert_eq!(summary.undetermined_linear + summary.refused, 0);
+    let p = summary.p_unstable_linear.expect("linear analysis");
+    assert_eq!(p.n, spec.samples);
+    (p.estimate, p.ci95)
+}
+
+#[test]
+fn one_toleranced_gain_gives_the_closed_form_probability() {
+    let (loaded, _, _) = study("robots/stage_1dof_rigid.urdf", "");
+    let c_star = routh_boundary(&loaded);
+    // A non-dyadic probability (0.4 / 1.7), so that no design hits it by its
+    // structure alone.
+    let (low, high) = (0.6 * c_star, 2.3 * c_star);
+    let exact = (c_star - low) / (high - low);
+    println!("c* = {c_star:.4} N s/m, P(unstable) = {exact:.6}");
+    // Plain Monte Carlo: inside its own 95% interval.
+    let (p, ci) = p_unstable(&damping_table(2000, "random", low, high));
+    assert!(
+        ci[0] <= exact && exact <= ci[1],
+        "random: {p} {ci:?} vs {exact}"
+    );
+    // Latin hypercube: stratified, error below one stratum.
+    let (p, _) = p_unstable(&damping_table(500, "lhs", low, high));
+    assert!(
+        (p - exact).abs() <= 1.0 / 500.0 + 1e-12,
+        "lhs: {p} vs {exact}"
+    );
+    // Scrambled Sobol: the error shrinks as 1/n.
+    for n in [64, 256, 1024] {
+        let (p, ci) = p_unstable(&damping_table(n, "sobol", low, high));
+        let error = (p - exact).abs();
+        println!("sobol n = {n}: {p:.6} (error {error:.2e}), ci {ci:?}");
+        assert!(
+            error <= 1.0 / n as f64 + 1e-12,
+            "sobol n = {n}: {p} vs {exact}"
+        );
+        assert!(ci[0] <= exact && exact <= ci[1]);
+    }
+}
+
+#[test]
+fn samples_are_reproducible_and_shards_recombine() {
+    let table = "[robust]\nsamples = 48\nseed = 11\nsampling = \"random\"\n\
+                 [[robust.parameter]]\nparameter = \"controller.c\"\ndistribution = \"lognormal\"\nrelative = false\nmedian = 36.0\nsd = 0.3\n\
+                 [[robust.parameter]]\nparameter = \"overrides.bearing_friction.f_s\"\ndistribution = \"normal\"\nsd = 0.05\n";
+    let (loaded, robot_file, scenario) = study("robots/stage_1dof_rigid.urdf", table);
+    let spec = RobustSpec::from_scenario(&scenario, &robot_file, None, None).expect("spec");
+    let all: Vec<usize> = (0..48).collect();
+    let whole = spec.run(&loaded, &robot_file, &all, 2, &|_, _| {});
+    let again = spec.run(&loaded, &robot_file, &all, 1, &|_, _| {});
+    assert_eq!(whole, again, "the same seed gives the same samples");
+    let mut shards = Vec::new();
+    for i in 0..3 {
+        let mine: Vec<usize> = all.iter().copied().filter(|k| k % 3 == i).collect();
+        shards.extend(spec.run(&loaded, &robot_file, &mine, 1, &|_, _| {}));
+    }
+    shards.sort_by_key(|r| r.index);
+    assert_eq!(shards, whole, "shards recombine into the single run");
+    let other = RobustSpec::from_scenario(&scenario, &robot_file, None, Some(12)).expect("spec");
+    assert_ne!(
+        other.values(0),
+        spec.values(0),
+        "another seed, other samples"
+    );
+    // Both verdicts appear, so the comparison is not between empty rows.
+    let unstable = whole
+        .iter()
+        .filter(|r| r.outcome.stable_linear == Some(false))
+        .count();
+    assert!(unstable > 0 && unstable < 48, "{unstable} of 48 unstable");
+}
+
+#[test]
+fn patterns_draw_each_match_or_one_shared_draw() {
+    let pattern = |shared: bool| {
+        format!(
+            "[robust]\nsamples = 8\n[[robust.parameter]]\nparameter = \"overrides.friction_*.f_s\"\ndistribution = \"uniform\"\nhalf_width = 0.1\nshared = {shared}\n"
+        )
+    };
+    let spec = |table: &str| {
+        let (_, robot_file, scenario) = study("robots/stage_4fi.urdf", table);
+        RobustSpec::from_scenario(&scenario, &robot_file, None, None).expect("spec")
+    };
+    let independent = spec(&pattern(false));
+    assert_eq!(independent.dimensions.len(), 4);
+    let values = independent.values(5);
+    assert!(values.windows(2).any(|w| w[0] != w[1]), "independent draws");
+    let shared = spec(&pattern(true));
+    assert_eq!(shared.dimensions.len(), 1);
+    assert_eq!(shared.columns().len(), 4);
+    let values = shared.values(5);
+    // Same nominal, same quantile: the same value for all four bearings.
+    assert!(values.windows(2).all(|w| w[0] == w[1]), "{values:?}");
+}
+
+#[test]
+fn nonsense_tables_are_named() {
+    let error = |robust: &str| {
+        let (_, robot_file, scenario) = study("robots/stage_1dof_rigid.urdf", robust);
+        RobustSpec::from_scenario(&scenario, &robot_file, None, None)
+            .expect_err("refused")
+            .to_string()
+    };
+    let entry = |body: &str| format!("[robust]\n[[robust.parameter]]\n{body}\n");
+    let cases = [
+        ("[robust]\nsamples = 10\n".to_string(), "nothing is toleranced"),
+        (
+            entry("parameter = \"controller.c\"\ndistribution = \"normal\"\nsd = 0.3"),
+            "truncnormal",
+        ),
+        (
+            entry("parameter = \"overrides.nope.f_s\"\ndistribution = \"uniform\"\nhalf_width = 0.1"),
+            "nope",
+        ),
+        (
+            entry("parameter = \"overrides.*.q\"\ndistribution = \"uniform\"\nhalf_width = 0.1"),
+            "matches no parameter",
+        ),
+        (
+            entry("parameter = \"controller.c\"\ndistribution = \"uniform\""),
+            "robust.parameter[0].half_width",
+        ),
+        (
+            entry("parameter = \"controller.k_i\"\ndistribution = \"uniform\"\nhalf_width = 0.1"),
+            "robust.parameter[0].relative",
+        ),
+        (
+            entry("parameter = \"controller.c\"\ndistribution = \"uniform\"\nrelative = false\nlow = 5\nhigh = 1"),
+            "robust.parameter[0].high",
+        ),
+        (
+            entry("parameter = \"controller.c\"\ndistribution = \"gamma\"\nsd = 1"),
+            "robust",
+        ),
+        (
+            format!(
+                "{}[[robust.parameter]]\nparameter = \"controller.c\"\ndistribution = \"uniform\"\nhalf_width = 0.2\n",
+                entry("parameter = \"controller.c\"\ndistribution = \"uniform\"\nhalf_width = 0.1")
+            ),
+            "toleranced twice",
+        ),
+        (
+            "[robust]\nsamples = 70000\n[[robust.parameter]]\nparameter = \"controller.c\"\ndistribution = \"uniform\"\nhalf_width = 0.1\n".to_string(),
+            "use random or lhs",
+        ),
+        (
+            "[robust]\nsamples = 0\n[[robust.parameter]]\nparameter = \"controller.c\"\ndistribution = \"uniform\"\nhalf_width = 0.1\n".to_string(),
+            "robust.samples",
+        ),
+    ];
+    for (table, needle) in cases {
+        let message = error(&table);
+        assert!(message.contains(needle), "{needle:?} not in {message:?}");
+    }
+}
