@@ -128,7 +128,7 @@ mod tests {
 
     fn sample(grid: &str) -> Provenance {
         let mut items = BTreeMap::new();
-        items.insert("study".to_string(), study.to_string());
+        items.insert("study".to_string(), "sweep".to_string());
         items.insert("grid".to_string(), grid.to_string());
         items.insert("program".to_string(), "fistage 0".to_string());
         Provenance {
