@@ -46,6 +46,11 @@ pub struct BenchArgs {
     /// by 0.01 (where accuracy, not the stiff modes, sets the step), 1, 10, 100 and 1000.
     #[arg(long)]
     pub stiffness: bool,
+    /// Time a tolerance analysis of the four-bearing stage (or of
+    /// `--scenario`, which needs a [robust] table): 10 000 linear and 1 000
+    /// simulated 2 s samples on one and two threads.
+    #[arg(long)]
+    pub robust: bool,
     /// Python with FMPy for the FMU table (default: the test environment's,
     /// `target/fmi-venv/bin/python`, else `python3`).
     #[arg(long)]
@@ -155,6 +160,13 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     }
     if args.stiffness {
         return stiffness_table(args);
+    }
+    if args.robust {
+        let scenario = args
+            .scenario
+            .clone()
+            .unwrap_or_else(|| PathBuf::from("scenarios/robust/four_bearing_population.toml"));
+        return crate::bench_robust::robust_table(&scenario);
     }
     if args.engines {
         let scenarios = match &args.scenario {

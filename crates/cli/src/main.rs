@@ -6,6 +6,7 @@
 
 mod bench;
 mod bench_fmu;
+mod bench_robust;
 mod check;
 mod figures;
 mod fmu;
@@ -19,6 +20,7 @@ mod robust;
 mod run;
 mod study;
 mod sweep;
+mod tune;
 
 use clap::{Parser, Subcommand};
 
@@ -47,6 +49,8 @@ enum Command {
     Sweep(sweep::SweepArgs),
     /// Tolerance analysis of a population of stages (samples.csv, summary.json, plots).
     Robust(robust::RobustArgs),
+    /// Servo gains with the largest bandwidth that keep a whole population stable.
+    Tune(tune::TuneArgs),
     /// Largest Lyapunov exponent: limit cycle (about 0) or chaos (positive).
     Lyapunov(lyapunov::LyapunovArgs),
     /// Identify LuGre parameters from measured stage data.
@@ -72,6 +76,7 @@ fn main() -> anyhow::Result<()> {
         Command::Modes(args) => modes::run(&args),
         Command::Sweep(args) => sweep::run(&args),
         Command::Robust(args) => robust::run(&args),
+        Command::Tune(args) => tune::run(&args),
         Command::Lyapunov(args) => lyapunov::run(&args),
         Command::Fmu(args) => fmu::run(&args),
     }

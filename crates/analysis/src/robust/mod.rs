@@ -35,6 +35,7 @@ pub mod distribution;
 pub mod sampling;
 pub mod statistics;
 pub mod table;
+pub mod tune;
 
 use fistage_model::{LoadError, Loaded, Parameter, RobotSpec, Scenario};
 use serde::{Deserialize, Serialize};

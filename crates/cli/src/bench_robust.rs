@@ -1,0 +1,59 @@
+//! `fistage bench --robust`: the cost of a tolerance analysis of the
+//! four-bearing stage (`scenarios/robust/four_bearing_population.toml`):
+//! 10 000 linear samples and 1 000 simulated 2 s samples, each on one and on
+//! two threads, side by side. Samples are computed as `fistage robust`
+//! computes them, without writing files.
+
+use std::path::Path;
+use std::time::Instant;
+
+use fistage_analysis::assess::Analyses;
+use fistage_analysis::robust::RobustSpec;
+use fistage_model::RobotSpec;
+
+/// One timed case: (label, samples, analysis, simulated duration).
+const CASES: [(&str, usize, Analyses, Option<f64>); 2] = [
+    ("linear", 10_000, Analyses::Linear, None),
+    (
+        "simulated, 2 s each",
+        1_000,
+        Analyses::Simulation,
+        Some(2.0),
+    ),
+];
+
+/// Prints the Markdown table.
+pub fn robust_table(scenario: &Path) -> anyhow::Result<()> {
+    let loaded = fistage_model::load(scenario)?;
+    let robot_file = RobotSpec::from_file(&loaded.scenario.robot)?;
+    println!("Tolerance analysis of {} (wall time):", scenario.display());
+    println!();
+    println!(
+        "| samples | analysis | 1 thread [s] | 2 threads [s] | speed-up | samples/s (2 threads) |"
+    );
+    println!("|---:|---|---:|---:|---:|---:|");
+    for (label, samples, analysis, duration) in CASES {
+        let mut spec =
+            RobustSpec::from_scenario(&loaded.scenario, &robot_file, Some(samples), None)?;
+        spec.assessment.analysis = analysis;
+        spec.assessment.duration = duration;
+        let indices: Vec<usize> = (0..samples).collect();
+        let time = |threads: usize| {
+            let start = Instant::now();
+            let results = spec.run(&loaded, &robot_file, &indices, threads, &|_, _| {});
+            (start.elapsed().as_secs_f64(), results)
+        };
+        let (one, first) = time(1);
+        let (two, second) = time(2);
+        anyhow::ensure!(
+            first == second,
+            "one and two threads gave different samples"
+        );
+        println!(
+            "| {samples} | {label} | {one:.2} | {two:.2} | {:.2} | {:.0} |",
+            one / two,
+            samples as f64 / two
+        );
+    }
+    Ok(())
+}
