@@ -1653,16 +1653,18 @@ def gen_identify(quick):
                          ("--sigma2-from", os.path.join(SCRATCH, "nope.json"), "refuse"),
                          ("--sigma2-from", fss, "refuse"),
                          ("--freq-unit", "furlong", "refuse"), ("--mag-unit", "dBm", "refuse"),
-                         ("--phase-unit", "grad", "refuse"), ("--element", "", "refuse"),
-                         ("--element", "a,b", "refuse"), ("--element", "a]\n[b", "refuse")]:
-        ident("frf", "%s=%r" % (flag, v), "\n".join(Fq) + "\n", exp, flag_needles(flag), [flag, v])
+                         ("--phase-unit", "grad", "refuse"), ("--element", "", "either"),
+                         ("--element", "a,b", "either"), ("--element", "a]\n[b", "either")]:
+        ident("frf", "%s=%r" % (flag, v), "\n".join(Fq) + "\n", exp,
+              flag_needles(flag) + (["not identifiable"] if exp == "either" else []) +
+              ([os.path.basename(v)] if "/" in v else []), [flag, v])
     for flag, v, exp in [("--huber-delta", "-1", "refuse"), ("--huber-delta", "nan", "refuse"),
                          ("--huber-delta", "0", "refuse"), ("--v-s-start", "-1", "refuse"),
                          ("--v-s-start", "nan", "refuse"), ("--v-s-start", "0", "refuse"),
                          ("--v-s-start", "1e300", "either"),
                          ("--loss", "l3", "refuse"), ("--velocity-unit", "furlong", "refuse"),
-                         ("--force-unit", "kgf", "refuse"), ("--element", "", "refuse"),
-                         ("--element", 'a"b', "refuse"), ("--element", "a b", "either")]:
+                         ("--force-unit", "kgf", "refuse"), ("--element", "", "either"),
+                         ("--element", 'a"b', "either"), ("--element", "a b", "either")]:
         ident("stribeck", "%s=%r" % (flag, v), "\n".join(S) + "\n", exp, flag_needles(flag), [flag, v])
     # a fit.json from stribeck that is hostile for --sigma2-from
     bad_fit = write(os.path.join(d, "badfit.json"), '{"sigma2": {"value": NaN, "ci95": [1, 2]}}')
@@ -1683,11 +1685,289 @@ def gen_identify(quick):
             "either", ["friction", "element", "bearing"])
 
 # ---------------------------------------------------------------------------
+# 6. modes
+# ---------------------------------------------------------------------------
+
+
+# the keys the modes variants change: a refusal naming one of them is clear
+MODES_KEYS = ["controller.k", "controller.c", "controller.k_i", "overrides.bearing_friction.",
+              "overrides.isolator.", "overrides.friction_fl.", "mass", "platform.velocity"]
+
+
+def gen_modes(quick):
+    cat = "modes"
+    b = fig05b()
+    robot_text = read(ROBOT1)
+    heavy = write(fresh("modes/heavy", ".urdf"), robot_text.replace('<mass value="1.0"/>', '<mass value="1e9"/>'))
+    light = write(fresh("modes/light", ".urdf"), robot_text.replace('<mass value="1.0"/>', '<mass value="1e-9"/>')
+                  .replace('<mass value="0.5"/>', '<mass value="1e-9"/>'))
+    heavyb = write(fresh("modes/heavyb", ".urdf"), robot_text.replace('<mass value="0.5"/>', '<mass value="1e9"/>'))
+    variants = [
+        ("baseline fig05b_fi", b),
+        ("k = 1e12", set_line(b, "k", "1e12", "controller")),
+        ("c = 1e12", set_line(b, "c", "1e12", "controller")),
+        ("k_i = 1e12", set_line(b, "k_i", "1e12", "controller")),
+        ("k = c = k_i = 1e12", set_line(set_line(set_line(b, "k", "1e12", "controller"), "c", "1e12",
+                                                 "controller"), "k_i", "1e12", "controller")),
+        ("k = 1e-12, c = 0", set_line(set_line(b, "k", "1e-12", "controller"), "c", "0", "controller")),
+        ("k = 0, c = 0", set_line(set_line(b, "k", "0", "controller"), "c", "0", "controller")),
+        ("c = -100 (negative damping)", set_line(b, "c", "-100", "controller")),
+        ("k = -6e4", set_line(b, "k", "-6e4", "controller")),
+        ("table mass 1e9", set_line(b, "robot", tq(heavy))),
+        ("bearing mass 1e9", set_line(b, "robot", tq(heavyb))),
+        ("masses 1e-9", set_line(b, "robot", tq(light))),
+        ("sigma0 = 1e15", b + "\n[overrides.bearing_friction]\nsigma0 = 1e15\n"),
+        ("sigma0 = 1e15, c = 1e12", set_line(b, "c", "1e12", "controller") +
+         "\n[overrides.bearing_friction]\nsigma0 = 1e15\n"),
+        ("sigma0 = 1e-3", b + "\n[overrides.bearing_friction]\nsigma0 = 1e-3\n"),
+        ("v_s = 1e-12", b + "\n[overrides.bearing_friction]\nv_s = 1e-12\n"),
+        ("isolator k_x = 1e15", b + "\n[overrides.isolator]\nk_x = 1e15\n"),
+        ("isolator k_x = 0", b + "\n[overrides.isolator]\nk_x = 0\n"),
+        ("isolator k_x = -4e4", b + "\n[overrides.isolator]\nk_x = -4e4\n"),
+        ("platform velocity 0", set_line(b, "velocity", "0.0", "platform")),
+        ("platform velocity 1e3", set_line(b, "velocity", "1e3", "platform")),
+        ("platform velocity 1e-300", set_line(b, "velocity", "1e-300", "platform")),
+        ("4-bearing traverse", traverse()),
+        ("4-bearing traverse, k = 1e12", set_line(traverse(), "k", "1e12", "controller")),
+        ("4-bearing, friction sigma0 = 1e15", traverse() + "\n[overrides.friction_fl]\nsigma0 = 1e15\n"),
+        ("rigid stage k_i = 1e12", set_line(set_line(b, "robot", tq(RIGID)), "k_i", "1e12", "controller")),
+        ("rigid stage c = 1e12", set_line(set_line(b, "robot", tq(RIGID)), "c", "1e12", "controller")),
+    ]
+    for label, text in variants:
+        scen = scenario_file(cat, text, "m")
+        for eq in ("both",) if quick else ("both", "sticking", "slipping"):
+            out = fresh("out/modes")
+            add(cat, "%s, --equilibrium %s" % (label, eq),
+                ["modes", scen, "--json", "--equilibrium", eq, "--out", out], "either",
+                ["undetermined", "equilibrium", "singular", "not finite"] + MODES_KEYS, outputs=[out],
+                json_stdout=True)
+        if not quick:
+            out = fresh("out/modes")
+            add(cat, "%s, table output" % label, ["modes", scen, "--out", out, "--shapes", "3"], "either",
+                ["undetermined", "equilibrium", "singular"] + MODES_KEYS, outputs=[out])
+
+
+# ---------------------------------------------------------------------------
+# 7. flags
+# ---------------------------------------------------------------------------
+
+
+def gen_flags(quick):
+    cat = "flags"
+    S = scenario_file(cat, fig05b(duration="0.2"), "f")
+    SW = scenario_file(cat, sweep_text(), "fsw")
+    RB = scenario_file(cat, robust_text(), "frb")
+    afile = write(fresh("flags/existing", ".txt"), "precious\n")
+    fss = os.path.join(SCRATCH, "flags", "fss.csv")
+    setup(["identify", "simulate-stribeck", RIGID, "--out", fss])
+    subs = {
+        "run": [S, "--no-plots"], "check": [S], "bench": ["--scenario", S, "--rtol", "1e-6", "--repeat", "1"],
+        "modes": [S], "sweep": [SW], "robust": [RB], "lyapunov": [S, "--transient", "0.1", "--duration", "0.2"],
+        "identify": ["stribeck", fss], "fmu": [S],
+    }
+    outflag = {"run": "--out", "modes": "--out", "sweep": "--out", "robust": "--out", "fmu": "-o",
+               "identify": "--out"}
+    for sub, good in subs.items():
+        def o():
+            if sub in outflag:
+                return [outflag[sub], fresh("out/flags")] if sub != "fmu" else ["-o", fresh("out/flags", ".fmu")]
+            return []
+        add(cat, "%s --help" % sub, [sub, "--help"], "accept", [])
+        add(cat, "%s --nope" % sub, [sub] + good + ["--nope"] + o(), "refuse", ["--nope"])
+        add(cat, "%s -Z" % sub, [sub] + good + ["-Z"], "refuse", ["-Z"])
+        add(cat, "%s without arguments" % sub, [sub], "either" if sub == "bench" else "refuse",
+                ["required", "<SCENARIO>", "usage", "<COMMAND>", "<DATA>"])
+        add(cat, "%s with a missing scenario" % sub, [sub, os.path.join(SCRATCH, "missing.toml")] +
+            (good[1:] if sub not in ("identify", "bench") else []),
+            "either" if sub == "bench" else "refuse", ["missing.toml", "<COMMAND>", "unrecognized", "unexpected"])
+        add(cat, "%s with an extra positional" % sub, [sub] + good + ["extra_positional"], "refuse",
+            ["extra_positional"])
+        if sub in outflag:
+            f = outflag[sub]
+            add(cat, "%s %s without value" % (sub, f), [sub] + good + [f], "refuse", [f, "value"])
+            if sub == "fmu":  # -o names a file: replacing it is the documented job
+                add(cat, "%s %s at an existing file" % (sub, f), [sub] + good + [f, write(fresh("flags/keep", ".txt"),
+                                                                                           "precious\n")],
+                    "either", [f, "exists"])
+            else:
+                add(cat, "%s %s at an existing file" % (sub, f), [sub] + good + [f, afile], "refuse",
+                    [f, os.path.basename(afile), "exists", "not a directory"], guard=[afile], guard_always=True)
+            add(cat, "%s %s empty" % (sub, f), [sub] + good + ["%s=" % f if f.startswith("--") else f, ""],
+                "refuse", [f, "empty", "value"])
+    numeric = [
+        ("run", [S, "--no-plots", "--out"], "--rtol", ["-1", "nan", "0", "inf", "abc", "1", "1e-300"]),
+        ("run", [S, "--no-plots", "--engine", "rapier", "--out"], "--dt", ["-1", "nan", "0", "inf", "1e-300", "abc"]),
+        ("run", [S, "--no-plots", "--out"], "--engine", ["nope", "", "NATIVE"]),
+        ("modes", [S, "--out"], "--shapes", ["-1", "nan", "abc", "1000000000", "18446744073709551616"]),
+        ("modes", [S, "--out"], "--equilibrium", ["nope", ""]),
+        ("sweep", [SW, "--out"], "--threads", ["0", "-1", "nan", "abc", "1000000000000"]),
+        ("sweep", [SW, "--out"], "--shard", ["2/2", "1/0", "abc", "-1/2"]),
+        ("robust", [RB, "--out"], "--threads", ["0", "-1", "abc"]),
+        ("robust", [RB, "--out"], "--samples", ["0", "-1", "nan", "1e12"]),
+        ("lyapunov", [S, "--transient", "0.1", "--duration", "0.2", "--out-unused"], "--interval",
+         ["0", "-1", "nan", "inf", "1e12", "1e-300"]),
+        ("lyapunov", [S, "--duration", "0.2", "--out-unused"], "--transient", ["-1", "nan", "inf", "1e12"]),
+        ("lyapunov", [S, "--transient", "0.1", "--out-unused"], "--duration", ["-1", "nan", "0", "inf", "1e12"]),
+        ("bench", ["--scenario", S, "--repeat", "1", "--out-unused"], "--rtol", ["-1", "nan", "0", "abc", "1e-6,nan"]),
+        ("bench", ["--scenario", S, "--rtol", "1e-6", "--out-unused"], "--repeat", ["0", "-1", "abc"]),
+        ("bench", ["--scenario", S, "--rtol", "1e-6", "--repeat", "1", "--out-unused"], "--signal",
+         ["nope", "", "encoder.jerk"]),
+        ("fmu", [S, "-o"], "--library", [os.path.join(SCRATCH, "nope.so"), afile, "/dev/null"]),
+    ]
+    expect_ok = {("sweep", "--threads", "0"), ("robust", "--threads", "0"), ("run", "--rtol", "1"),
+                 ("modes", "--shapes", "1000000000"), ("lyapunov", "--interval", "1e12"),
+                 ("lyapunov", "--transient", "1e12"), ("lyapunov", "--duration", "1e12")}
+    for sub, pre, flag, vals in numeric:
+        for v in vals:
+            args = [sub] + [a for a in pre if a not in ("--out", "-o", "--out-unused")]
+            outputs = []
+            if pre[-1] in ("--out", "-o"):
+                out = fresh("out/flags", ".fmu" if sub == "fmu" else "")
+                args += [pre[-1], out]
+                outputs = [out] if sub != "fmu" else []
+            args.append("%s=%s" % (flag, v))
+            exp = "either" if (sub, flag, v) in expect_ok else "refuse"
+            if (sub, flag, v) == ("lyapunov", "--duration", "1e12"):
+                exp = "refuse"
+            add(cat, "%s %s=%s" % (sub, flag, v), args, exp, flag_needles(flag) + ([v] if len(v) > 2 else []),
+                outputs=outputs)
+    add(cat, "unknown subcommand", ["nope"], "refuse", ["nope"])
+    add(cat, "no subcommand", [], "refuse", ["usage", "<COMMAND>"])
+    add(cat, "--version", ["--version"], "accept", [])
+    add(cat, "identify unknown method", ["identify", "nope", fss], "refuse", ["nope"])
+    add(cat, "identify frf on stribeck data", ["identify", "frf", fss], "refuse", ["freq", "column", "fss.csv"])
+    add(cat, "non-UTF-8 argument", ["check", b"\xff\xfe.toml".decode("utf-8", "surrogateescape")], "refuse",
+        ["utf", ".toml", "\ufffd"])
+
+
+# ---------------------------------------------------------------------------
+# 8. output folders
+# ---------------------------------------------------------------------------
+
+
+def no_stale_plots(case, res):
+    out = case.outputs[0]
+    stale = [f for f in os.listdir(out) if f.endswith((".svg", ".png"))]
+    return ("stale plot files remain after --force --no-plots: %s" % ", ".join(sorted(stale))) if stale else None
+
+
+def foreign_survives(path):
+    def post(case, res):
+        return None if os.path.exists(path) else "an unrelated file %s was deleted" % path
+    return post
+
+
+def gen_output(quick):
+    cat = "output"
+    S = scenario_file(cat, fig05b(duration="0.2"), "o")
+    S2 = scenario_file(cat, set_line(fig05b(duration="0.2"), "k", "7e4", "controller"), "o2")
+    BAD = scenario_file(cat, set_line(fig05b(duration="0.2"), "duration", "nan"), "bad")
+    BADRUN = scenario_file(cat, fig05b(duration="0.2") + "\n[overrides.bearing_friction]\nsigma0 = 1e300\n", "badrun")
+    SW = scenario_file(cat, sweep_text(), "osw")
+    RB = scenario_file(cat, robust_text(), "orb")
+
+    def prepared(args):
+        d = fresh("out/prev")
+        setup(args + [d])
+        return d
+
+    # run
+    d = prepared(["run", S, "--out"])
+    add(cat, "run into an earlier result without --force", ["run", S, "--out", d], "refuse",
+        ["--force", os.path.basename(d), "exists", "earlier"], guard=[d])
+    d = prepared(["run", S, "--out"])
+    add(cat, "run of another scenario into an earlier result", ["run", S2, "--out", d, "--no-plots"], "refuse",
+        ["--force", os.path.basename(d), "exists", "earlier"], guard=[d])
+    d = prepared(["run", S, "--out"])
+    add(cat, "run --force --no-plots over a result with plots", ["run", S, "--out", d, "--force", "--no-plots"],
+        "accept", [], outputs=[d], post=no_stale_plots)
+    d = prepared(["run", S, "--out"])
+    add(cat, "failing (load) run with --force", ["run", BAD, "--out", d, "--force"], "refuse",
+        ["duration"], guard=[d])
+    d = prepared(["run", S, "--out"])
+    add(cat, "failing (simulation) run with --force", ["run", BADRUN, "--out", d, "--force"], "either",
+        ["sigma0", "simulation"], guard=[d], outputs=[d])
+    d = prepared(["run", S, "--out"])
+    add(cat, "failing (unknown engine flag) run with --force", ["run", S, "--out", d, "--force", "--engine=nope"],
+        "refuse", ["nope", "engine"], guard=[d])
+    d = fresh("out/foreign")
+    os.makedirs(d)
+    write(os.path.join(d, "notes.txt"), "mine\n")
+    add(cat, "run into a folder with unrelated files", ["run", S, "--out", d, "--no-plots"], "either",
+        ["--force", "notes.txt", os.path.basename(d)], guard=[d], outputs=[d],
+        post=foreign_survives(os.path.join(d, "notes.txt")))
+    d = fresh("out/empty")
+    os.makedirs(d)
+    add(cat, "run into an existing empty folder", ["run", S, "--out", d, "--no-plots"], "accept", [], outputs=[d])
+    d = fresh("out/ro")
+    os.makedirs(d)
+    os.chmod(d, 0o500)
+    add(cat, "run into a read-only folder", ["run", S, "--out", os.path.join(d, "sub"), "--no-plots"],
+        "either" if os.geteuid() == 0 else "refuse",  # root writes anyway
+        ["permission", "sub", os.path.basename(d)], guard=[d], outputs=[os.path.join(d, "sub")])
+    d = prepared(["run", S, "--out"])
+    write(os.path.join(d, "trajectory.csv"), "tampered\n")
+    add(cat, "run into a result whose trajectory was edited, no --force", ["run", S, "--out", d], "refuse",
+        ["--force", os.path.basename(d)], guard=[d])
+    d = fresh("out/link")
+    target = fresh("out/linktarget")
+    os.makedirs(target)
+    write(os.path.join(target, "keep.txt"), "keep\n")
+    os.symlink(target, d)
+    add(cat, "run --force into a symlink to a folder with files", ["run", S, "--out", d, "--force", "--no-plots"],
+        "either", ["symlink", os.path.basename(d)], post=foreign_survives(os.path.join(target, "keep.txt")))
+    # modes
+    d = prepared(["modes", S, "--out"])
+    add(cat, "modes into an earlier result without --force", ["modes", S, "--out", d], "refuse",
+        ["--force", os.path.basename(d)], guard=[d])
+    d = prepared(["modes", S, "--out"])
+    add(cat, "failing modes with --force", ["modes", BAD, "--out", d, "--force"], "refuse", ["duration"], guard=[d])
+    d = prepared(["modes", S, "--out"])
+    add(cat, "modes --force --shapes 0 over one with pictures", ["modes", S, "--out", d, "--force", "--shapes", "0"],
+        "either", ["shapes"], outputs=[d], post=no_stale_plots)
+    # sweep
+    d = prepared(["sweep", SW, "--out"])
+    add(cat, "failing sweep with --force over a result", ["sweep", BAD, "--out", d, "--force"], "refuse",
+        ["duration", "sweep"], guard=[d])
+    d = prepared(["run", S, "--out"])
+    add(cat, "sweep into a run's result without --force", ["sweep", SW, "--out", d], "refuse",
+        ["--force", os.path.basename(d), "other work"], guard=[d])
+    # robust
+    d = prepared(["robust", RB, "--out"])
+    add(cat, "failing robust with --force over a result", ["robust", BAD, "--out", d, "--force"], "refuse",
+        ["duration"], guard=[d])
+    d = prepared(["robust", RB, "--out"])
+    add(cat, "robust of other samples into a result", ["robust", RB, "--out", d, "--samples", "4"], "either",
+        ["--force", "samples", os.path.basename(d)], guard=[d], outputs=[d])
+    # identify
+    fss = fresh("output/fss", ".csv")
+    setup(["identify", "simulate-stribeck", RIGID, "--out", fss])
+    d = prepared(["identify", "stribeck", fss, "--out"])
+    add(cat, "identify into an earlier result without --force", ["identify", "stribeck", fss, "--out", d], "refuse",
+        ["--force", os.path.basename(d)], guard=[d])
+    empty = write(fresh("output/empty", ".csv"), "")
+    d = prepared(["identify", "stribeck", fss, "--out"])
+    add(cat, "failing identify with --force", ["identify", "stribeck", empty, "--out", d, "--force"], "refuse",
+        [os.path.basename(empty), "empty"], guard=[d])
+    d = prepared(["identify", "stribeck", fss, "--out"])
+    und = write(fresh("output/und", ".csv"), "velocity_mm_per_s,force_N\n" + "10,6\n-10,-6\n" * 5)
+    add(cat, "undetermined identify with --force", ["identify", "stribeck", und, "--out", d, "--force"], "refuse",
+        ["not identifiable"], guard=[d])
+    # simulate-stribeck --out at an existing file
+    f = write(fresh("output/keep", ".csv"), "keep\n")
+    add(cat, "simulate-stribeck over an existing csv", ["identify", "simulate-stribeck", RIGID, "--out", f],
+        "either", ["--force", "exists", os.path.basename(f)], outputs=[f])
+    # fmu over an existing file
+    f = write(fresh("output/keep", ".fmu"), "keep\n")
+    add(cat, "fmu -o over an existing file", ["fmu", S, "-o", f], "either", ["exists", "--force", os.path.basename(f)])
+
+# ---------------------------------------------------------------------------
 # Main
 # ---------------------------------------------------------------------------
 
 GENERATORS = {"robot": gen_robot, "scenario": gen_scenario, "sweep": gen_sweep,
-              "robust": gen_robust, "identify": gen_identify}
+              "robust": gen_robust, "identify": gen_identify, "modes": gen_modes, "flags": gen_flags,
+              "output": gen_output}
 
 
 def main():
