@@ -62,6 +62,8 @@ pub struct Outcome {
     pub stable_sim: Option<bool>,
     /// Steady peak-to-peak of the tracking error, m.
     pub amplitude: Option<f64>,
+    /// Steady peak-to-peak of the first floating body's yaw, rad.
+    pub yaw_amplitude: Option<f64>,
     /// Stable equilibrium beside a limit cycle (linear stable, simulation oscillates).
     pub bistable: Option<bool>,
 }
@@ -77,10 +79,11 @@ impl Assessment {
             outcome.max_real_eig = Some(max_real);
         }
         if self.analysis.simulation()
-            && let Some((stable, amplitude)) = simulated_verdict(loaded, self)
+            && let Some((stable, amplitude, yaw)) = simulated_verdict(loaded, self)
         {
             outcome.stable_sim = Some(stable);
             outcome.amplitude = Some(amplitude);
+            outcome.yaw_amplitude = yaw;
         }
         if let (Some(linear), Some(simulated)) = (outcome.stable_linear, outcome.stable_sim) {
             outcome.bistable = Some(linear && !simulated);
@@ -173,13 +176,29 @@ pub fn linear_verdict(loaded: &Loaded) -> Option<(Option<bool>, f64)> {
     Some((stable, analysis.max_real_part))
 }
 
-/// Steady peak-to-peak of the controller's sensor over the last quarter of a
-/// run, and over the quarter before it.
-fn sensor_peak_to_peak(loaded: &Loaded, duration: f64) -> Option<(f64, f64)> {
+/// Steady peak-to-peaks of a run from rest.
+struct Steady {
+    /// Tracking error (sensor minus reference) over the last quarter, m.
+    last: f64,
+    /// The same over the quarter before it, m.
+    before: f64,
+    /// Yaw of the first floating body over the last quarter, rad (none
+    /// without a floating body).
+    yaw: Option<f64>,
+}
+
+/// The tracking error's peak-to-peak over the last quarter of a run and the
+/// quarter before it, and the yaw's over the last quarter.
+fn steady_peak_to_peak(loaded: &Loaded, duration: f64) -> Option<Steady> {
     let scenario = &loaded.scenario;
     let model = &loaded.model;
     let sensor = model.controller().map_or(0, |c| c.sensor);
     model.sensors().get(sensor)?;
+    let yaw_signal = model
+        .bodies()
+        .iter()
+        .find(|b| matches!(b.joint.motion, fistage_model::JointMotion::Floating))
+        .and_then(|b| model.signal_index(&format!("{}.yaw", b.joint.name)));
     let excitation = ScenarioExcitation::from_scenario(scenario);
     let settings = SimSettings {
         t_end: duration,
@@ -191,37 +210,52 @@ fn sensor_peak_to_peak(loaded: &Loaded, duration: f64) -> Option<(f64, f64)> {
         .simulate(model, &x0, &excitation, &settings, &mut |_| {})
         .ok()?;
     let mut ws = model.workspace();
-    let p2p = |from: f64, to: f64, ws: &mut fistage_model::Workspace| {
+    let mut outputs = vec![0.0; model.signals().len()];
+    let range = |from: f64, to: f64, value: &mut dyn FnMut(usize, f64) -> f64| {
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
         for (k, &t) in trajectory.times.iter().enumerate() {
             if t >= from && t <= to {
-                model.evaluate(trajectory.state(k), &excitation.inputs(t), ws);
-                let value =
-                    ws.elements.sensor_position[sensor] - excitation.inputs(t).reference.position;
-                lo = lo.min(value);
-                hi = hi.max(value);
+                let v = value(k, t);
+                lo = lo.min(v);
+                hi = hi.max(v);
             }
         }
         hi - lo
     };
-    Some((
-        p2p(0.75 * duration, duration, &mut ws),
-        p2p(0.5 * duration, 0.75 * duration, &mut ws),
-    ))
+    let mut tracking = |k: usize, t: f64| {
+        model.evaluate(trajectory.state(k), &excitation.inputs(t), &mut ws);
+        ws.elements.sensor_position[sensor] - excitation.inputs(t).reference.position
+    };
+    let last = range(0.75 * duration, duration, &mut tracking);
+    let before = range(0.5 * duration, 0.75 * duration, &mut tracking);
+    let yaw = yaw_signal.map(|index| {
+        let mut ws = model.workspace();
+        range(0.75 * duration, duration, &mut |k, t| {
+            model.outputs(
+                trajectory.state(k),
+                &excitation.inputs(t),
+                &mut outputs,
+                &mut ws,
+            );
+            outputs[index]
+        })
+    });
+    Some(Steady { last, before, yaw })
 }
 
-/// Simulated verdict: (no persistent oscillation, amplitude). A run that is
-/// still decaying (last-quarter peak-to-peak below 80% of the quarter before,
-/// but above the threshold) is run again twice as long, at most twice.
-fn simulated_verdict(loaded: &Loaded, assessment: &Assessment) -> Option<(bool, f64)> {
+/// Simulated verdict: (no persistent oscillation, tracking amplitude, yaw
+/// amplitude). A run that is still decaying (last-quarter peak-to-peak below
+/// 80% of the quarter before, but above the threshold) is run again twice as
+/// long, at most twice.
+fn simulated_verdict(loaded: &Loaded, assessment: &Assessment) -> Option<(bool, f64, Option<f64>)> {
     let mut duration = assessment.duration.unwrap_or(loaded.scenario.duration);
     for extension in 0..3 {
-        let (last, before) = sensor_peak_to_peak(loaded, duration)?;
-        if last <= assessment.oscillation_threshold {
-            return Some((true, last));
+        let steady = steady_peak_to_peak(loaded, duration)?;
+        if steady.last <= assessment.oscillation_threshold {
+            return Some((true, steady.last, steady.yaw));
         }
-        if last >= 0.8 * before || extension == 2 {
-            return Some((false, last));
+        if steady.last >= 0.8 * steady.before || extension == 2 {
+            return Some((false, steady.last, steady.yaw));
         }
         duration *= 2.0;
     }

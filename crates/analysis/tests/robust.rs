@@ -319,3 +319,28 @@ mod tuning {
         assert!(without.unstable > 0, "{without:?}");
     }
 }
+
+/// Simulated samples carry the tracking and yaw amplitudes: a four-bearing
+/// stage whose bearings' friction differs yaws (the mismatch turns the
+/// table), the 1-DOF stage has no yaw.
+#[test]
+fn simulated_samples_carry_the_yaw_of_a_floating_table() {
+    let table = "[robust]\nsamples = 3\nanalysis = \"simulation\"\nduration = 0.3\nsampling = \"random\"\n\
+                 [[robust.parameter]]\nparameter = \"overrides.friction_*.f_c\"\ndistribution = \"uniform\"\nhalf_width = 0.2\n";
+    let (loaded, robot_file, scenario) = study("robots/stage_4fi.urdf", table);
+    let spec = RobustSpec::from_scenario(&scenario, &robot_file, None, None).expect("spec");
+    let results = spec.run(&loaded, &robot_file, &[0, 1, 2], 2, &|_, _| {});
+    for r in &results {
+        let yaw = r.outcome.yaw_amplitude.expect("a floating table yaws");
+        assert!(yaw > 0.0 && yaw.is_finite(), "{yaw}");
+        assert!(r.outcome.amplitude.is_some_and(f64::is_finite));
+        assert!(r.outcome.stable_linear.is_none(), "simulation only");
+    }
+    let one = "[robust]\nsamples = 1\nanalysis = \"both\"\nduration = 0.3\n\
+               [[robust.parameter]]\nparameter = \"controller.c\"\ndistribution = \"uniform\"\nhalf_width = 0.2\n";
+    let (loaded, robot_file, scenario) = study("robots/stage_1dof_fi.urdf", one);
+    let spec = RobustSpec::from_scenario(&scenario, &robot_file, None, None).expect("spec");
+    let result = &spec.run(&loaded, &robot_file, &[0], 1, &|_, _| {})[0];
+    assert!(result.outcome.yaw_amplitude.is_none());
+    assert!(result.outcome.amplitude.is_some() && result.outcome.stable_linear.is_some());
+}

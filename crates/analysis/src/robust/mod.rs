@@ -532,6 +532,9 @@ pub struct Summary {
     /// Quantiles of the steady tracking-error amplitude, m.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub amplitude_quantiles: Option<Quantiles>,
+    /// Quantiles of the steady yaw amplitude (stages with a floating table), rad.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub yaw_amplitude_quantiles: Option<Quantiles>,
     /// How `sensitivity` ranks.
     pub sensitivity_method: &'static str,
     /// Parameters by influence, largest first.
@@ -605,6 +608,12 @@ impl Summary {
             refused: results.len() - built,
             max_real_eig_quantiles: Quantiles::of(eig.iter().map(|&(_, v)| v).collect()),
             amplitude_quantiles: Quantiles::of(amp.iter().map(|&(_, v)| v).collect()),
+            yaw_amplitude_quantiles: Quantiles::of(
+                results
+                    .iter()
+                    .filter_map(|r| r.outcome.yaw_amplitude)
+                    .collect(),
+            ),
             sensitivity_method: if analysis.linear() {
                 "|Spearman rank correlation| of each drawn parameter with the largest real part"
             } else {

@@ -1,6 +1,7 @@
 //! `samples.csv`: one row per sample, `sample` (its index), every drawn
 //! value (a column per parameter path), then `stable_linear`, `max_real_eig`,
-//! `stable_sim`, `amplitude`, `bistable` and `refused` (why the sample's
+//! `stable_sim`, `amplitude` (tracking error, m), `yaw_amplitude` (rad),
+//! `bistable` and `refused` (why the sample's
 //! stage could not be built, if so). Numbers are written in shortest
 //! round-trip form, so rows read back exactly, and a row is taken back only
 //! when its values are the ones its index draws.
@@ -10,11 +11,12 @@ use std::path::Path;
 use super::{RobustSpec, SampleResult};
 use crate::assess::Outcome;
 
-const VERDICTS: [&str; 6] = [
+const VERDICTS: [&str; 7] = [
     "stable_linear",
     "max_real_eig",
     "stable_sim",
     "amplitude",
+    "yaw_amplitude",
     "bistable",
     "refused",
 ];
@@ -44,6 +46,7 @@ pub fn row(result: &SampleResult) -> String {
     cells.push(optional(o.max_real_eig, number));
     cells.push(optional(o.stable_sim, |b| b.to_string()));
     cells.push(optional(o.amplitude, number));
+    cells.push(optional(o.yaw_amplitude, number));
     cells.push(optional(o.bistable, |b| b.to_string()));
     // One cell: no delimiter or line end of the reason survives.
     cells.push(optional(result.refused.as_deref(), |why| {
@@ -102,9 +105,10 @@ fn parse_row(line: &str, spec: &RobustSpec, n_values: usize) -> Option<SampleRes
         max_real_eig: parse_number(verdicts[1])?,
         stable_sim: parse_bool(verdicts[2])?,
         amplitude: parse_number(verdicts[3])?,
-        bistable: parse_bool(verdicts[4])?,
+        yaw_amplitude: parse_number(verdicts[4])?,
+        bistable: parse_bool(verdicts[5])?,
     };
-    let refused = (!verdicts[5].is_empty()).then(|| verdicts[5].to_string());
+    let refused = (!verdicts[6].is_empty()).then(|| verdicts[6].to_string());
     Some(SampleResult {
         index,
         values,
