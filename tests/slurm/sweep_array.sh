@@ -131,11 +131,36 @@ for i in $(seq 0 $((shards - 1))); do
 done
 "$fistage" sweep "$scenario" --out "$work/merged" "${merge_args[@]}" >/dev/null
 
+failed=0
 if cmp -s "$work/whole/points.csv" "$work/merged/points.csv"; then
     echo "slurm job array of $shards shards ($tasks tasks seen by squeue): merged points.csv equals the unsharded run ($(($(wc -l <"$work/whole/points.csv") - 1)) points)"
-    echo "slurm: 1 passed, 0 failed"
 else
     diff "$work/whole/points.csv" "$work/merged/points.csv" | head -n 20 || true
-    echo "slurm: 0 passed, 1 failed"
+    failed=1
+fi
+
+# The same for a tolerance analysis: 64 stages of the Fig. 5b population.
+population="$work/population.toml"
+sed -e "s|../../robots/|$repo/robots/|" "$repo/scenarios/robust/fig05b_population.toml" >"$population"
+"$fistage" robust "$population" --samples 64 --out "$work/robust_whole" --threads 1 >/dev/null
+sbatch --wait --quiet --array=0-$((shards - 1)) --cpus-per-task=1 \
+    --output="$work/robust_task_%a.log" \
+    --wrap "\"$fistage\" robust \"$population\" --samples 64 --shard \${SLURM_ARRAY_TASK_ID}/$shards --out \"$work/robust\${SLURM_ARRAY_TASK_ID}\" --threads 1"
+robust_merge=()
+for i in $(seq 0 $((shards - 1))); do
+    robust_merge+=(--merge "$work/robust$i")
+done
+"$fistage" robust "$population" --samples 64 --out "$work/robust_merged" "${robust_merge[@]}" >/dev/null
+if cmp -s "$work/robust_whole/samples.csv" "$work/robust_merged/samples.csv"; then
+    echo "slurm job array of $shards robust shards: merged samples.csv equals the unsharded run (64 samples)"
+else
+    diff "$work/robust_whole/samples.csv" "$work/robust_merged/samples.csv" | head -n 20 || true
+    failed=1
+fi
+
+if [ "$failed" = 0 ]; then
+    echo "slurm: 2 passed, 0 failed"
+else
+    echo "slurm: some failed"
     exit 1
 fi

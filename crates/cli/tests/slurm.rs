@@ -1,6 +1,6 @@
-//! A sharded sweep run as a real Slurm job array on a single-node cluster
-//! (`tests/slurm/sweep_array.sh`): the merged shards equal the unsharded run
-//! byte for byte. The script installs nothing; without Slurm and munge the
+//! A sharded sweep and a sharded tolerance analysis run as real Slurm job
+//! arrays on a single-node cluster (`tests/slurm/sweep_array.sh`): the merged
+//! shards equal the unsharded run byte for byte. The script installs nothing; without Slurm and munge the
 //! test says SKIPPED, unless `.ci/run` requires it (`FISTAGE_SYSTEM_TESTS=required`).
 
 use std::path::Path;
@@ -30,7 +30,8 @@ fn sweep_shards_run_as_a_slurm_job_array_merge_to_the_unsharded_table() {
     }
     assert!(output.status.success(), "{stdout}\n{stderr}");
     assert!(
-        stdout.contains("merged points.csv equals the unsharded run"),
+        stdout.contains("merged points.csv equals the unsharded run")
+            && stdout.contains("merged samples.csv equals the unsharded run"),
         "{stdout}\n{stderr}"
     );
 }
