@@ -254,3 +254,88 @@ fn deep_nesting_is_refused_before_parsing() {
         &["robots/bad.urdf", "nested more than"],
     );
 }
+
+/// What the adversarial campaign (`tests/adversarial/campaign.py`) found
+/// accepted, or refused without naming the culprit, each now a clear error
+/// naming the key, element, attribute or line.
+#[test]
+fn campaign_findings_are_refused_by_name() {
+    let base = "robot = \"r.urdf\"\nduration = 1\n";
+    for (extra, needles) in [
+        (
+            "[statistics]\nwindow = [0.1, 0.2, 0.3]\n",
+            &["statistics.window", "3 values"][..],
+        ),
+        ("[overrides.nope]\n", &["overrides.nope", "empty table"]),
+        (
+            "[overrides.world]\nmass = 1\n",
+            &["overrides.world", "does not move"],
+        ),
+        (
+            "[reference]\nkind = \"ramp\"\nvelocity = \"\"\n",
+            &["reference.velocity", "must be a number"],
+        ),
+        (
+            "[reference]\nkind = \"ramp\"\nspeed = 1\n",
+            &["reference.speed", "unknown key"],
+        ),
+        (
+            "[reference]\nkind = \"step\"\nvalue = 1\n",
+            &["reference.time", "missing"],
+        ),
+        ("[solver]\nrtol = 1e-300\n", &["solver.rtol", "1e-14"]),
+    ] {
+        let message = scenario_error(&format!("{base}{extra}"));
+        assert_mentions(&message, needles);
+    }
+    let message = scenario_error("robot = \"\"\nduration = 1\n");
+    assert_mentions(&message, &["robot", "empty"]);
+    for (from, to, needles) in [
+        (
+            "<joint name=\"table_x\" type=\"prismatic\">",
+            "<joint name=\"table_x\" type=\"prismatic\"><limit lower=\"NaN\" upper=\"1\" effort=\"1\" velocity=\"1\"/>",
+            &["joint \"table_x\"", "lower=\"NaN\"", "line"][..],
+        ),
+        (
+            "<robot name=\"stage_1dof_fi\"",
+            "<robot name=\"\"",
+            &["robot", "empty"],
+        ),
+        (
+            "<mass value=\"0.5\"/>",
+            "<mass value=\"abc\"/>",
+            &["<mass value=\"abc\">", "a finite number"],
+        ),
+        (
+            "<stiffness xyz=\"40000 0 0\"",
+            "<stiffness",
+            &["stiffness", "xyz is missing"],
+        ),
+    ] {
+        let xml = shipped_robot().replacen(from, to, 1);
+        assert!(xml != shipped_robot(), "{from} is in the shipped robot");
+        assert_mentions(&robot_error(&xml), needles);
+    }
+    let misspelt = shipped_robot()
+        .replacen("<robot ", "<robbot ", 1)
+        .replace("</robot>", "</robbot>");
+    assert_mentions(&robot_error(&misspelt), &["root element must be <robot>"]);
+    let device = RobotSpec::from_file(Path::new("/dev/zero")).expect_err("a device");
+    assert_mentions(&device.to_string(), &["/dev/zero", "not a regular file"]);
+}
+
+/// A sweep whose simulated duration per point cannot fit in memory is
+/// refused when read (it aborted with a failed allocation).
+#[test]
+fn a_sweep_duration_beyond_memory_is_refused() {
+    let text = format!(
+        "robot = {:?}\nduration = 1\n[controller]\nsensor = \"encoder\"\nactuator = \"drive\"\nk = 1e5\nc = 100\n\
+         [sweep]\nduration = 1e12\n[[sweep.axis]]\nparameter = \"controller.k\"\nfrom = 1e4\nto = 1e5\npoints = 2\n",
+        path("robots/stage_1dof_fi.urdf").display().to_string()
+    );
+    let scenario = Scenario::from_str(&text, Path::new("sweep.toml")).expect("scenario");
+    let error = fistage_analysis::sweep::SweepSpec::from_scenario(&scenario)
+        .expect_err("refused")
+        .to_string();
+    assert_mentions(&error, &["sweep.duration", "samples per point"]);
+}

@@ -122,6 +122,24 @@ pub fn in_parallel<T: Send>(
     }
 }
 
+/// Output samples a point's simulation may hold, extensions included (as
+/// for a run: each is a full state vector).
+pub const MAX_POINT_SAMPLES: f64 = 2e7;
+
+/// Whether a simulated duration per point fits in memory: a run is sampled
+/// at the scenario's rate (at least 4000 samples) and may be extended to
+/// four times its duration while it is still decaying.
+pub fn check_duration(scenario: &Scenario, duration: f64) -> Result<(), String> {
+    let samples = 4.0 * (duration * scenario.sample_rate).max(4000.0);
+    if samples > MAX_POINT_SAMPLES {
+        return Err(format!(
+            "{duration:e} s at {} Hz is up to {samples:.3e} samples per point (runs still decaying are extended to four times their duration); at most {MAX_POINT_SAMPLES:e}",
+            scenario.sample_rate
+        ));
+    }
+    Ok(())
+}
+
 /// Applies one parameter (a path of the parameter table) to a scenario and
 /// its (unmodified) robot, with the same paths and rules as scenario
 /// overrides and FMU parameters.

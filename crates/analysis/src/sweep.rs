@@ -185,6 +185,10 @@ impl SweepSpec {
         {
             return Err(scenario.error("sweep.duration", format!("must be > 0, got {d}")));
         }
+        if let Some(d) = spec.duration {
+            crate::assess::check_duration(scenario, d)
+                .map_err(|why| scenario.error("sweep.duration", why))?;
+        }
         Ok(spec)
     }
 

@@ -155,6 +155,7 @@ fn max_deviation(
 
 /// Runs the benchmark and prints Markdown.
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
+    anyhow::ensure!(args.repeat >= 1, "--repeat must be at least 1, got 0");
     if args.fmu {
         return crate::bench_fmu::fmu_table(&fmu_python(args), args.repeat.min(5));
     }

@@ -137,8 +137,19 @@ struct OutputArgs {
     allow_undetermined: bool,
 }
 
-/// Fails, after the report is written and shown, when the data leave
-/// parameters undetermined and the user did not allow it.
+/// The refusal of an undetermined fit, saying that `--out` was left as it was.
+fn nothing_written(error: anyhow::Error, output: &OutputArgs) -> anyhow::Error {
+    match &output.out {
+        Some(dir) => error.context(format!(
+            "nothing written to {} (--allow-undetermined writes the fit)",
+            dir.display()
+        )),
+        None => error,
+    }
+}
+
+/// Fails, after the report is shown, when the data leave parameters
+/// undetermined and the user did not allow it (then nothing is written).
 fn refuse_undetermined(
     output: &OutputArgs,
     not_identifiable: &[fistage_ident::NotIdentifiable],
@@ -351,7 +362,18 @@ fn write_file(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).with_context(|| format!("{}: cannot write", path.display()))
 }
 
+/// `--element` names a friction element of a robot file: the same rules.
+fn check_element(output: &OutputArgs) -> Result<()> {
+    fistage_model::robot::check_name(&output.element).map_err(|why| {
+        anyhow::anyhow!(
+            "--element {:?}: {why} (it must be a name a robot file accepts)",
+            output.element
+        )
+    })
+}
+
 fn run_stribeck(args: &StribeckArgs) -> Result<()> {
+    check_element(&args.output)?;
     let units = UnitOverrides {
         velocity: unit_flag(Quantity::Velocity, &args.velocity_unit)?,
         force: unit_flag(Quantity::Force, &args.force_unit)?,
@@ -380,7 +402,8 @@ fn run_stribeck(args: &StribeckArgs) -> Result<()> {
     };
     let report = StribeckReport::new(&source, &fit, asymmetric.as_ref());
     let json = serde_json::to_string_pretty(&report)?;
-    if let Some(target) = &args.output.out {
+    let verdict = refuse_undetermined(&args.output, &report.not_identifiable);
+    if let (Some(target), true) = (&args.output.out, verdict.is_ok()) {
         let folder = OutputFolder::begin(target, args.output.force)?;
         let dir = folder.path();
         write_outputs(
@@ -396,10 +419,11 @@ fn run_stribeck(args: &StribeckArgs) -> Result<()> {
         folder.commit()?;
     }
     print_report(args.output.json, &json, &report.table());
-    refuse_undetermined(&args.output, &report.not_identifiable)
+    verdict.map_err(|e| nothing_written(e, &args.output))
 }
 
 fn run_frf(args: &FrfArgs) -> Result<()> {
+    check_element(&args.output)?;
     let units = UnitOverrides {
         frequency: unit_flag(Quantity::Frequency, &args.freq_unit)?,
         magnitude: unit_flag(Quantity::Magnitude, &args.mag_unit)?,
@@ -424,7 +448,8 @@ fn run_frf(args: &FrfArgs) -> Result<()> {
     let fit = fit_frf(&data, &options)?;
     let report = FrfReport::new(&data.source, &fit);
     let json = serde_json::to_string_pretty(&report)?;
-    if let Some(target) = &args.output.out {
+    let verdict = refuse_undetermined(&args.output, &report.not_identifiable);
+    if let (Some(target), true) = (&args.output.out, verdict.is_ok()) {
         let folder = OutputFolder::begin(target, args.output.force)?;
         let dir = folder.path();
         write_outputs(
@@ -439,7 +464,7 @@ fn run_frf(args: &FrfArgs) -> Result<()> {
         folder.commit()?;
     }
     print_report(args.output.json, &json, &report.table());
-    refuse_undetermined(&args.output, &report.not_identifiable)
+    verdict.map_err(|e| nothing_written(e, &args.output))
 }
 
 fn print_report(json: bool, json_text: &str, table: &str) {
@@ -496,7 +521,7 @@ fn parse_interval(text: &str) -> Result<[f64; 2]> {
 
 /// The fit.json written by `identify stribeck --out`.
 fn read_stribeck_report(path: &Path) -> Result<StribeckReport> {
-    let text = std::fs::read_to_string(path)
+    let text = fistage_model::input::read_text(path, fistage_model::input::MAX_DESCRIPTION_BYTES)
         .with_context(|| format!("{}: cannot read", path.display()))?;
     let report: StribeckReport = serde_json::from_str(&text).with_context(|| {
         format!(

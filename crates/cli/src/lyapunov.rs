@@ -22,6 +22,11 @@ pub struct LyapunovArgs {
     pub interval: f64,
 }
 
+/// Renormalisation intervals a run may have.
+const MAX_INTERVALS: f64 = 1e6;
+/// Simulated seconds of the transient, and of the measurement.
+const MAX_SPAN: f64 = 1e5;
+
 /// Runs the command.
 pub fn run(args: &LyapunovArgs) -> anyhow::Result<()> {
     for (name, value) in [
@@ -38,6 +43,20 @@ pub fn run(args: &LyapunovArgs) -> anyhow::Result<()> {
         args.interval > 0.0 && args.duration >= args.interval,
         "--interval must be > 0 and at most --duration"
     );
+    anyhow::ensure!(
+        args.duration / args.interval <= MAX_INTERVALS,
+        "--duration / --interval is {:.3e} renormalisations; at most {MAX_INTERVALS:e}",
+        args.duration / args.interval
+    );
+    for (name, value) in [
+        ("--transient", args.transient),
+        ("--duration", args.duration),
+    ] {
+        anyhow::ensure!(
+            value <= MAX_SPAN,
+            "{name} must be at most {MAX_SPAN:e} s, got {value:e}"
+        );
+    }
     let loaded = fistage_model::load(&args.scenario)?;
     let settings = LyapunovSettings {
         transient: args.transient,

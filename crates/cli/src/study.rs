@@ -57,9 +57,9 @@ pub struct StudyArgs {
     /// Merge the items of these shard folders instead of computing.
     #[arg(long)]
     pub merge: Vec<PathBuf>,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
-    pub threads: Option<usize>,
+    /// Worker threads (default: all cores; at most 1024).
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..=1024))]
+    pub threads: Option<u16>,
     /// Recompute items already in the output folder or its journal.
     #[arg(long)]
     pub no_resume: bool,
@@ -274,6 +274,7 @@ fn compute<S: Study>(
     let total = todo.len().max(1);
     let threads = args
         .threads
+        .map(usize::from)
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let new = study.compute(&todo, threads, &|row, done| {
         if let Ok(mut file) = partial.lock() {

@@ -720,3 +720,99 @@ fn sweep_refuses_pieces_of_other_work() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Flags out of range are refused before any work (the adversarial campaign
+/// found these running for ever or printing a table of nothing).
+#[test]
+fn flags_out_of_range_are_refused() {
+    let fig05b = repository().join("scenarios/paper/fig05b_fi.toml");
+    let sweep = repository().join("scenarios/paper/fig06b_fi_vp20.toml");
+    let cases: [(Vec<&std::ffi::OsStr>, &str); 5] = [
+        (
+            vec![
+                "sweep".as_ref(),
+                sweep.as_os_str(),
+                "--threads=1000000000000".as_ref(),
+            ],
+            "--threads",
+        ),
+        (
+            vec![
+                "lyapunov".as_ref(),
+                fig05b.as_os_str(),
+                "--interval=1e-300".as_ref(),
+            ],
+            "renormalisations",
+        ),
+        (
+            vec![
+                "lyapunov".as_ref(),
+                fig05b.as_os_str(),
+                "--duration=1e12".as_ref(),
+            ],
+            "--duration",
+        ),
+        (
+            vec![
+                "lyapunov".as_ref(),
+                fig05b.as_os_str(),
+                "--transient=1e12".as_ref(),
+            ],
+            "--transient",
+        ),
+        (
+            vec![
+                "bench".as_ref(),
+                "--scenario".as_ref(),
+                fig05b.as_os_str(),
+                "--repeat=0".as_ref(),
+            ],
+            "--repeat",
+        ),
+    ];
+    for (args, needle) in cases {
+        let output = fistage().args(&args).output().expect("runs");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(!output.status.success(), "{args:?} was accepted");
+        assert!(stderr.contains(needle), "{needle}: {stderr}");
+    }
+}
+
+/// A fit that leaves parameters not identifiable exits non-zero and writes
+/// nothing: an earlier result in --out stays as it was, even with --force.
+#[test]
+fn an_undetermined_fit_leaves_the_output_folder_alone() {
+    let dir = scratch("undetermined");
+    std::fs::create_dir_all(dir.join("out")).expect("dir");
+    std::fs::write(dir.join("out/fit.json"), "earlier").expect("write");
+    let data = dir.join("one_speed.csv");
+    let rows: String = (0..20)
+        .map(|i| {
+            format!(
+                "{},{}\n",
+                if i % 2 == 0 { 2.0 } else { -2.0 },
+                if i % 2 == 0 { 6.0 } else { -6.0 }
+            )
+        })
+        .collect();
+    std::fs::write(&data, format!("velocity_mm_per_s,force_N\n{rows}")).expect("write");
+    let output = fistage()
+        .args(["identify", "stribeck"])
+        .arg(&data)
+        .arg("--out")
+        .arg(dir.join("out"))
+        .arg("--force")
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success());
+    assert!(
+        stderr.contains("not identifiable") && stderr.contains("nothing written"),
+        "{stderr}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("out/fit.json")).expect("kept"),
+        "earlier"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

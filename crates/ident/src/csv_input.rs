@@ -174,19 +174,7 @@ const MAX_FILE_BYTES: u64 = 4 << 30;
 
 fn read_file(path: &Path) -> Result<(String, String)> {
     let source = path.display().to_string();
-    if let Ok(metadata) = std::fs::metadata(path)
-        && metadata.len() > MAX_FILE_BYTES
-    {
-        return Err(IdentError::Csv {
-            file: source,
-            line: 0,
-            message: format!(
-                "the file holds {} bytes, more than the {MAX_FILE_BYTES} a data file may",
-                metadata.len()
-            ),
-        });
-    }
-    match std::fs::read_to_string(path) {
+    match fistage_model::input::read_text(path, MAX_FILE_BYTES) {
         Ok(text) => Ok((source, text)),
         Err(e) => Err(IdentError::Io {
             file: source,

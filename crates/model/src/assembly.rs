@@ -360,6 +360,20 @@ impl<'a> Assembler<'a> {
             .ok_or_else(|| self.robot_error(element, format!("link \"{link}\" does not exist")))
     }
 
+    /// The fixed joints between `link` and the world, child to parent.
+    fn welds(&self, link: &str) -> Vec<String> {
+        let mut names = Vec::new();
+        let mut at = link;
+        while let Some(joint) = self.robot.joints.iter().find(|j| j.child == at) {
+            names.push(format!("\"{}\"", joint.name));
+            at = &joint.parent;
+            if names.len() > self.robot.joints.len() {
+                break;
+            }
+        }
+        names
+    }
+
     /// A point/axis element on a moving body.
     fn moving_point_axis(&self, spec: &PointAxisSpec, kind: &str) -> Result<PointAxis, LoadError> {
         let element = format!("{kind} \"{}\"", spec.name);
@@ -368,8 +382,9 @@ impl<'a> Assembler<'a> {
             return Err(self.robot_error(
                 element,
                 format!(
-                    "link \"{}\" is welded to the world and cannot move",
-                    spec.link
+                    "link \"{}\" is welded to the world (by fixed joints {}) and cannot move",
+                    spec.link,
+                    self.welds(&spec.link).join(", ")
                 ),
             ));
         };

@@ -60,6 +60,7 @@ pub mod elements;
 pub mod equilibrium;
 pub mod error;
 mod evaluator;
+pub mod input;
 mod laws;
 pub mod linearize;
 pub mod lugre;
@@ -72,6 +73,7 @@ pub mod rule;
 pub mod scalar;
 pub mod scenario;
 mod translational;
+mod urdf_check;
 mod values;
 
 pub use assembly::{Loaded, assemble, load};

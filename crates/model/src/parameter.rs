@@ -528,6 +528,12 @@ fn element_target(name: &str, key: &str, robot: &RobotSpec) -> Result<Target, (S
             None => Err(unknown_key(POINT_KEYS.to_vec())),
         };
     }
+    if name == "world" {
+        return Err((
+            format!("overrides.{name}"),
+            "the world link does not move: it has nothing to override".into(),
+        ));
+    }
     if let Some(i) = robot.links.iter().position(|l| l.name == name) {
         return match key {
             "mass" => Ok(Target::LinkMass(i)),

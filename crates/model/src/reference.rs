@@ -190,11 +190,12 @@ impl Reference {
             at,
             message,
         };
+        let text = crate::input::read_text(path, crate::input::MAX_DATA_BYTES)
+            .map_err(|e| bad("file".into(), format!("cannot read: {e}")))?;
         let mut reader = csv::ReaderBuilder::new()
             .comment(Some(b'#'))
             .trim(csv::Trim::All)
-            .from_path(path)
-            .map_err(|e| bad("file".into(), e.to_string()))?;
+            .from_reader(text.as_bytes());
         let headers = reader
             .headers()
             .map_err(|e| bad("header".into(), e.to_string()))?

@@ -220,10 +220,12 @@ pub struct RobotSpec {
 impl RobotSpec {
     /// Reads and checks a robot file.
     pub fn from_file(path: &Path) -> Result<Self, LoadError> {
-        let text = std::fs::read_to_string(path).map_err(|reason| LoadError::Io {
-            file: path.to_path_buf(),
-            reason,
-        })?;
+        let text = crate::input::read_text(path, crate::input::MAX_DESCRIPTION_BYTES).map_err(
+            |reason| LoadError::Io {
+                file: path.to_path_buf(),
+                reason,
+            },
+        )?;
         Self::from_str(&text, path)
     }
 
@@ -237,6 +239,7 @@ impl RobotSpec {
             file: file.to_path_buf(),
             message: format!("malformed XML: {e}"),
         })?;
+        crate::urdf_check::check_urdf(&document, file)?;
         let urdf = urdf_rs::read_from_string(text).map_err(|e| LoadError::Syntax {
             file: file.to_path_buf(),
             message: format!("not a valid URDF robot: {e}"),
@@ -386,7 +389,7 @@ const MAX_NAME_LENGTH: usize = 128;
 const FORBIDDEN_IN_NAMES: &[char] = &[',', ';', '"', '\'', '[', ']', '{', '}', '<', '>', '=', '\\'];
 
 /// Why a name cannot serve as a signal, CSV and FMI name, if it cannot.
-fn check_name(name: &str) -> Result<(), String> {
+pub fn check_name(name: &str) -> Result<(), String> {
     if name.is_empty() {
         return Err("empty".into());
     }
@@ -712,8 +715,16 @@ impl ExtensionReader<'_> {
             return Ok([0.0; 6]);
         };
         self.check_attributes(node, element, &["xyz", "rpy"])?;
-        let t = self.vector(node, element, "xyz")?.unwrap_or_default();
-        let r = self.vector(node, element, "rpy")?.unwrap_or_default();
+        let required = |attribute: &str| {
+            self.vector(node, element, attribute)?.ok_or_else(|| {
+                self.error(
+                    element,
+                    format!("<{what}> needs both xyz and rpy (write 0 for a free direction); {attribute} is missing"),
+                )
+            })
+        };
+        let t = required("xyz")?;
+        let r = required("rpy")?;
         let values = [t[0], t[1], t[2], r[0], r[1], r[2]];
         for value in values {
             IsolatorSpec::RULE

@@ -48,8 +48,10 @@ struct ScenarioFile {
     #[serde(default)]
     platform: PlatformFile,
     controller: Option<ControllerSettings>,
+    /// Read key by key (see [`Checker::reference_file`]), so that an error
+    /// names the key rather than the table.
     #[serde(default)]
-    reference: ReferenceFile,
+    reference: toml::Table,
     #[serde(default)]
     overrides: BTreeMap<String, BTreeMap<String, toml::Value>>,
     #[serde(default)]
@@ -164,23 +166,18 @@ impl ControllerSettings {
     }
 }
 
-#[derive(Debug, Clone, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+#[derive(Debug, Clone)]
 enum ReferenceFile {
     Constant {
-        #[serde(default)]
         value: f64,
     },
     Step {
         time: f64,
-        #[serde(default)]
         initial: f64,
         value: f64,
     },
     Ramp {
-        #[serde(default)]
         start: f64,
-        #[serde(default)]
         initial: f64,
         velocity: f64,
     },
@@ -188,40 +185,20 @@ enum ReferenceFile {
         amplitude: f64,
         /// Hz.
         frequency: f64,
-        #[serde(default)]
         phase: f64,
-        #[serde(default)]
         offset: f64,
     },
-    #[serde(rename = "p2p", alias = "point_to_point")]
     PointToPoint {
         start: f64,
         duration: f64,
-        #[serde(default)]
         initial: f64,
         distance: f64,
     },
     Csv {
         file: PathBuf,
-        #[serde(default = "default_time_column")]
         time_column: String,
-        #[serde(default = "default_position_column")]
         position_column: String,
     },
-}
-
-fn default_time_column() -> String {
-    "time".into()
-}
-
-fn default_position_column() -> String {
-    "position".into()
-}
-
-impl Default for ReferenceFile {
-    fn default() -> Self {
-        Self::Constant { value: 0.0 }
-    }
 }
 
 /// Which engine integrates a scenario (`solver.engine`, or `engine` at the top).
@@ -319,13 +296,18 @@ impl SolverSettings {
     /// The relative tolerances every engine accepts: finite, `0 < rtol < 0.1`
     /// (the rule for `solver.rtol`, `--rtol` and an FMU importer's tolerance).
     pub fn check_rtol(rtol: f64) -> Result<(), String> {
-        if rtol.is_finite() && rtol > 0.0 && rtol < 0.1 {
+        // Below 1e-14 no double-precision error estimate can meet the
+        // tolerance: the step size would only collapse.
+        if rtol.is_finite() && (MIN_RTOL..0.1).contains(&rtol) {
             Ok(())
         } else {
-            Err(format!("must be > 0 and < 0.1, got {rtol}"))
+            Err(format!("must be >= {MIN_RTOL:e} and < 0.1, got {rtol}"))
         }
     }
 }
+
+/// The tightest relative tolerance a double-precision run can honour.
+pub const MIN_RTOL: f64 = 1e-14;
 
 impl Default for SolverSettings {
     fn default() -> Self {
@@ -403,7 +385,7 @@ struct OutputFile {
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct StatisticsFile {
-    window: Option<[f64; 2]>,
+    window: Option<Vec<f64>>,
 }
 
 /// Where a run starts (before the `[initial]` entries are applied).
@@ -474,10 +456,12 @@ pub struct Scenario {
 impl Scenario {
     /// Reads and checks a scenario file (not the robot it names).
     pub fn from_file(path: &Path) -> Result<Self, LoadError> {
-        let text = std::fs::read_to_string(path).map_err(|reason| LoadError::Io {
-            file: path.to_path_buf(),
-            reason,
-        })?;
+        let text = crate::input::read_text(path, crate::input::MAX_DESCRIPTION_BYTES).map_err(
+            |reason| LoadError::Io {
+                file: path.to_path_buf(),
+                reason,
+            },
+        )?;
         Self::from_str(&text, path)
     }
 
@@ -489,6 +473,9 @@ impl Scenario {
         })?;
         let base = file.parent().unwrap_or(Path::new(""));
         let checker = Checker { file };
+        if raw.robot.as_os_str().is_empty() {
+            return Err(checker.error("robot", "is empty: name the robot file"));
+        }
         checker.positive("duration", raw.duration)?;
         for (axis, g) in ["x", "y", "z"].iter().zip(raw.gravity) {
             checker.finite(&format!("gravity.{axis}"), g)?;
@@ -501,7 +488,7 @@ impl Scenario {
                 })?;
             }
         }
-        let reference = checker.reference(raw.reference, base)?;
+        let reference = checker.reference(checker.reference_file(raw.reference)?, base)?;
         SolverSettings::check_rtol(raw.solver.rtol)
             .map_err(|message| checker.error("solver.rtol", message))?;
         checker.positive("solver.atol_scale", raw.solver.atol_scale)?;
@@ -527,10 +514,19 @@ impl Scenario {
             .sample_rate
             .unwrap_or_else(|| default_sample_rate(raw.duration));
         checker.positive("output.sample_rate", sample_rate)?;
-        let window = raw
-            .statistics
-            .window
-            .unwrap_or([raw.duration / 2.0, raw.duration]);
+        let window = match raw.statistics.window.as_deref() {
+            None => [raw.duration / 2.0, raw.duration],
+            Some(&[from, to]) => [from, to],
+            Some(other) => {
+                return Err(checker.error(
+                    "statistics.window",
+                    format!(
+                        "must be [from, to] (two times, s), got {} values",
+                        other.len()
+                    ),
+                ));
+            }
+        };
         let window_ok = window[0] >= 0.0 && window[0] < window[1] && window[1] <= raw.duration;
         if !window_ok {
             return Err(checker.error(
@@ -683,6 +679,108 @@ impl Checker<'_> {
         }
     }
 
+    /// The `[reference]` table, key by key: `kind` (default `constant`) then
+    /// the numbers (or, for `csv`, the strings) that kind takes.
+    fn reference_file(&self, table: toml::Table) -> Result<ReferenceFile, LoadError> {
+        let kind = match table.get("kind") {
+            None => "constant",
+            Some(toml::Value::String(kind)) => kind.as_str(),
+            Some(other) => {
+                return Err(self.error(
+                    "reference.kind",
+                    format!("must be a string, got {}", other.type_str()),
+                ));
+            }
+        };
+        let keys: &[&str] = match kind {
+            "constant" => &["value"],
+            "step" => &["time", "initial", "value"],
+            "ramp" => &["start", "initial", "velocity"],
+            "sine" => &["amplitude", "frequency", "phase", "offset"],
+            "p2p" | "point_to_point" => &["start", "duration", "initial", "distance"],
+            "csv" => &["file", "time_column", "position_column"],
+            other => {
+                return Err(self.error(
+                    "reference.kind",
+                    format!("unknown kind \"{other}\" (constant, step, ramp, sine, p2p or csv)"),
+                ));
+            }
+        };
+        if let Some(key) = table
+            .keys()
+            .find(|k| *k != "kind" && !keys.contains(&k.as_str()))
+        {
+            return Err(self.error(
+                &format!("reference.{key}"),
+                format!(
+                    "unknown key for kind = \"{kind}\" (it takes {})",
+                    keys.join(", ")
+                ),
+            ));
+        }
+        let number = |key: &str, default: Option<f64>| -> Result<f64, LoadError> {
+            match (table.get(key), default) {
+                (Some(toml::Value::Float(v)), _) => Ok(*v),
+                (Some(toml::Value::Integer(v)), _) => Ok(*v as f64),
+                (Some(other), _) => Err(self.error(
+                    &format!("reference.{key}"),
+                    format!("must be a number, got {}", other.type_str()),
+                )),
+                (None, Some(default)) => Ok(default),
+                (None, None) => Err(self.error(
+                    &format!("reference.{key}"),
+                    format!("missing: kind = \"{kind}\" needs it"),
+                )),
+            }
+        };
+        let text = |key: &str, default: Option<&str>| -> Result<String, LoadError> {
+            match (table.get(key), default) {
+                (Some(toml::Value::String(s)), _) => Ok(s.clone()),
+                (Some(other), _) => Err(self.error(
+                    &format!("reference.{key}"),
+                    format!("must be a string, got {}", other.type_str()),
+                )),
+                (None, Some(default)) => Ok(default.to_string()),
+                (None, None) => Err(self.error(
+                    &format!("reference.{key}"),
+                    format!("missing: kind = \"{kind}\" needs it"),
+                )),
+            }
+        };
+        Ok(match kind {
+            "constant" => ReferenceFile::Constant {
+                value: number("value", Some(0.0))?,
+            },
+            "step" => ReferenceFile::Step {
+                time: number("time", None)?,
+                initial: number("initial", Some(0.0))?,
+                value: number("value", None)?,
+            },
+            "ramp" => ReferenceFile::Ramp {
+                start: number("start", Some(0.0))?,
+                initial: number("initial", Some(0.0))?,
+                velocity: number("velocity", None)?,
+            },
+            "sine" => ReferenceFile::Sine {
+                amplitude: number("amplitude", None)?,
+                frequency: number("frequency", None)?,
+                phase: number("phase", Some(0.0))?,
+                offset: number("offset", Some(0.0))?,
+            },
+            "csv" => ReferenceFile::Csv {
+                file: PathBuf::from(text("file", None)?),
+                time_column: text("time_column", Some("time"))?,
+                position_column: text("position_column", Some("position"))?,
+            },
+            _ => ReferenceFile::PointToPoint {
+                start: number("start", None)?,
+                duration: number("duration", None)?,
+                initial: number("initial", Some(0.0))?,
+                distance: number("distance", None)?,
+            },
+        })
+    }
+
     fn reference(&self, raw: ReferenceFile, base: &Path) -> Result<Reference, LoadError> {
         Ok(match raw {
             ReferenceFile::Constant { value } => {
@@ -765,6 +863,12 @@ impl Checker<'_> {
     ) -> Result<Vec<Override>, LoadError> {
         let mut overrides = Vec::new();
         for (target, table) in raw {
+            if table.is_empty() {
+                return Err(self.error(
+                    &format!("overrides.{target}"),
+                    "an empty table overrides nothing: give keys, or remove it",
+                ));
+            }
             for (key, value) in table {
                 let path = format!("overrides.{target}.{key}");
                 let value = match value {

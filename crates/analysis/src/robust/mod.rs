@@ -231,6 +231,10 @@ impl RobustSpec {
         {
             return Err(scenario.error("robust.duration", format!("must be > 0, got {d}")));
         }
+        if let Some(d) = raw.duration {
+            crate::assess::check_duration(scenario, d)
+                .map_err(|why| scenario.error("robust.duration", why))?;
+        }
         let mut dimensions: Vec<Dimension> = Vec::new();
         for (k, entry) in raw.parameters.iter().enumerate() {
             let key = format!("robust.parameter[{k}]");
