@@ -307,9 +307,9 @@ fn campaign_findings_are_refused_by_name() {
             &["<mass value=\"abc\">", "a finite number"],
         ),
         (
-            "<stiffness xyz=\"40000 0 0\"",
-            "<stiffness",
-            &["stiffness", "xyz is missing"],
+            "<stiffness xyz=\"40000 0 0\" rpy=\"0 0 0\"/>",
+            "<stiffness/>",
+            &["stiffness", "neither xyz nor rpy"],
         ),
     ] {
         let xml = shipped_robot().replacen(from, to, 1);

@@ -515,8 +515,8 @@ def robot_expect(el, attr, old, new, root):
     ptag = parent_tags[0] if parent_tags else ""
     fist_child = any(p.tag.startswith(FI) for p in root.iter() if el in list(p))
     if new is None:  # attribute deleted
-        if tag == "stiffness" and attr == "xyz":
-            return "refuse"  # the isolator's only stiffness (a missing <stiffness> is refused)
+        if tag == "stiffness" and attr == "xyz" and el.get("rpy") is None:
+            return "refuse"  # nothing left of the isolator's only stiffness
         if tag in ("origin", "damping", "stiffness"):
             return "either"  # optional, default zero
         if fist or fist_child:

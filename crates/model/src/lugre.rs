@@ -20,7 +20,7 @@ use thiserror::Error;
 
 /// A LuGre parameter that violates its physical requirement.
 #[derive(Debug, Clone, PartialEq, Error)]
-#[error("{name} must be {requirement}, got {value}")]
+#[error("{name} must be {requirement}, got {shown}", shown = crate::rule::show(*.value))]
 pub struct InvalidLugreParameter {
     /// Parameter name as used in files (`sigma0`, `f_c`, ...).
     pub name: &'static str,
@@ -41,7 +41,7 @@ impl InvalidLugreParameter {
         Self {
             name,
             value,
-            requirement: rule.requirement().to_string(),
+            requirement: rule.requirement_for(value),
         }
     }
 }

@@ -430,6 +430,17 @@ fn link_spec(link: &urdf_rs::Link, file: &Path) -> Result<LinkSpec, LoadError> {
             format!("mass must be >= 0, got {mass}"),
         ));
     }
+    if mass > 0.0 && !crate::rule::Rule::Positive.admits(mass) {
+        return Err(LoadError::robot(
+            file,
+            element,
+            format!(
+                "mass must be {} (or 0 for a massless link), got {}",
+                crate::rule::Rule::Positive.requirement_for(mass),
+                crate::rule::show(mass)
+            ),
+        ));
+    }
     let i = &link.inertial.inertia;
     let inertia = Matrix3::new(
         i.ixx, i.ixy, i.ixz, //
@@ -715,16 +726,14 @@ impl ExtensionReader<'_> {
             return Ok([0.0; 6]);
         };
         self.check_attributes(node, element, &["xyz", "rpy"])?;
-        let required = |attribute: &str| {
-            self.vector(node, element, attribute)?.ok_or_else(|| {
-                self.error(
-                    element,
-                    format!("<{what}> needs both xyz and rpy (write 0 for a free direction); {attribute} is missing"),
-                )
-            })
-        };
-        let t = required("xyz")?;
-        let r = required("rpy")?;
+        if node.attribute("xyz").is_none() && node.attribute("rpy").is_none() {
+            return Err(self.error(
+                element,
+                format!("<{what}> gives neither xyz nor rpy (leave out the element for none)"),
+            ));
+        }
+        let t = self.vector(node, element, "xyz")?.unwrap_or_default();
+        let r = self.vector(node, element, "rpy")?.unwrap_or_default();
         let values = [t[0], t[1], t[2], r[0], r[1], r[2]];
         for value in values {
             IsolatorSpec::RULE

@@ -4,7 +4,16 @@
 
 use std::fmt;
 
-/// What a parameter value must satisfy (every rule also requires a finite value).
+/// The largest magnitude any parameter may have (SI units): beyond it no
+/// stage is described, and the numerics only overflow.
+pub const MAX_MAGNITUDE: f64 = 1e18;
+/// The smallest value a positive parameter may have (SI units): below it the
+/// model's time scales underflow.
+pub const MIN_POSITIVE: f64 = 1e-18;
+
+/// What a parameter value must satisfy (every rule also requires a finite
+/// value of magnitude at most [`MAX_MAGNITUDE`], and a positive one at least
+/// [`MIN_POSITIVE`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Rule {
     /// Any finite number.
@@ -28,11 +37,27 @@ pub struct RuleViolation {
 
 impl fmt::Display for RuleViolation {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "must be {}, got {}", self.rule.requirement(), self.value)
+        write!(
+            f,
+            "must be {}, got {}",
+            self.rule.requirement_for(self.value),
+            show(self.value)
+        )
     }
 }
 
 impl std::error::Error for RuleViolation {}
+
+/// A number as a message shows it: plainly, or in exponent form when it is
+/// very large or very small.
+pub fn show(value: f64) -> String {
+    let magnitude = value.abs();
+    if value == 0.0 || !value.is_finite() || (1e-4..1e15).contains(&magnitude) {
+        value.to_string()
+    } else {
+        format!("{value:e}")
+    }
+}
 
 impl Rule {
     /// The requirement in words, e.g. `> 0`.
@@ -45,13 +70,28 @@ impl Rule {
         }
     }
 
+    /// The requirement `value` fails (or the rule's, when it passes): the
+    /// magnitude bounds are named when they are what is broken.
+    pub fn requirement_for(self, value: f64) -> String {
+        if value.is_finite() && value.abs() > MAX_MAGNITUDE {
+            format!("at most {MAX_MAGNITUDE:e} in magnitude (SI units)")
+        } else if self == Rule::Positive && value > 0.0 && value < MIN_POSITIVE {
+            format!("at least {MIN_POSITIVE:e} (SI units)")
+        } else if !value.is_finite() {
+            "finite".into()
+        } else {
+            self.requirement().into()
+        }
+    }
+
     /// Whether `value` satisfies the rule.
     pub fn admits(self, value: f64) -> bool {
         value.is_finite()
+            && value.abs() <= MAX_MAGNITUDE
             && match self {
                 Rule::Finite => true,
                 Rule::NonNegative => value >= 0.0,
-                Rule::Positive => value > 0.0,
+                Rule::Positive => value >= MIN_POSITIVE,
                 Rule::Spread => value.abs() < 1.0,
             }
     }
@@ -78,7 +118,18 @@ mod tests {
 
     #[test]
     fn rules_admit_what_they_say() {
-        assert!(Rule::Finite.admits(-1e300));
+        assert!(Rule::Finite.admits(-1e18));
+        assert!(!Rule::Finite.admits(-1e300));
+        assert!(!Rule::Positive.admits(1e-300));
+        assert!(Rule::NonNegative.admits(1e-300));
+        assert_eq!(
+            Rule::Positive.check(1e-300).unwrap_err().to_string(),
+            "must be at least 1e-18 (SI units), got 1e-300"
+        );
+        assert_eq!(
+            Rule::Finite.check(1e300).unwrap_err().to_string(),
+            "must be at most 1e18 in magnitude (SI units), got 1e300"
+        );
         assert!(!Rule::Finite.admits(f64::NAN));
         assert!(Rule::NonNegative.admits(0.0));
         assert!(!Rule::NonNegative.admits(-1e-300));

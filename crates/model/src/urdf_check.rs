@@ -11,6 +11,7 @@ use std::path::Path;
 
 use crate::error::LoadError;
 use crate::robot::check_name;
+use crate::rule::MAX_MAGNITUDE;
 
 /// Joint types of the URDF specification.
 const JOINT_TYPES: [&str; 6] = [
@@ -123,13 +124,17 @@ impl Checker<'_> {
                 };
                 let values: Vec<Option<f64>> = text
                     .split_whitespace()
-                    .map(|t| t.parse::<f64>().ok().filter(|v| v.is_finite()))
+                    .map(|t| {
+                        t.parse::<f64>()
+                            .ok()
+                            .filter(|v| v.is_finite() && v.abs() <= MAX_MAGNITUDE)
+                    })
                     .collect();
                 if values.len() != count || values.iter().any(Option::is_none) {
                     let wanted = if count == 1 {
-                        "a finite number".to_string()
+                        format!("a finite number of magnitude at most {MAX_MAGNITUDE:e}")
                     } else {
-                        format!("{count} finite numbers")
+                        format!("{count} finite numbers of magnitude at most {MAX_MAGNITUDE:e}")
                     };
                     return Err(self.error(
                         label.to_string(),
@@ -210,7 +215,15 @@ impl Checker<'_> {
 pub fn check_urdf(document: &roxmltree::Document, file: &Path) -> Result<(), LoadError> {
     let checker = Checker { file };
     let root = document.root_element();
-    if root.tag_name().name() != "robot" || root.tag_name().namespace().is_some() {
+    if let Some(namespace) = root.tag_name().namespace() {
+        return Err(checker.error(
+            format!("<{}> (line {})", root.tag_name().name(), line(root)),
+            format!(
+                "the root element is in namespace \"{namespace}\": URDF elements take none (bind the fistage namespace to the prefix, xmlns:fistage=\"...\")"
+            ),
+        ));
+    }
+    if root.tag_name().name() != "robot" {
         return Err(checker.error(
             format!("<{}> (line {})", root.tag_name().name(), line(root)),
             "the root element must be <robot>".into(),
