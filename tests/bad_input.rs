@@ -284,6 +284,18 @@ fn campaign_findings_are_refused_by_name() {
             &["reference.time", "missing"],
         ),
         ("[solver]\nrtol = 1e-300\n", &["solver.rtol", "1e-14"]),
+        (
+            "[solver]\nmax_step = 1e-300\n",
+            &["solver.max_step", "at least 1e-18"],
+        ),
+        (
+            "[platform]\nvelocity = 1e300\n",
+            &["platform.velocity", "at most 1e18"],
+        ),
+        (
+            "[initial]\n\"bearing_friction.z\" = 1e300\n",
+            &["initial.bearing_friction.z", "at most 1e18"],
+        ),
     ] {
         let message = scenario_error(&format!("{base}{extra}"));
         assert_mentions(&message, needles);
@@ -338,4 +350,28 @@ fn a_sweep_duration_beyond_memory_is_refused() {
         .expect_err("refused")
         .to_string();
     assert_mentions(&error, &["sweep.duration", "samples per point"]);
+}
+
+/// A servo whose actuator pushes against its sensor's direction on the same
+/// body is positive feedback: refused when the model is built, not found as
+/// a collapsing step size half a second into the run.
+#[test]
+fn a_servo_with_opposite_axes_is_refused() {
+    let xml = shipped_robot().replacen(
+        "<fistage:actuator name=\"drive\" link=\"table\">\n    <origin xyz=\"0 0 0\"/>\n    <axis xyz=\"1 0 0\"/>",
+        "<fistage:actuator name=\"drive\" link=\"table\">\n    <origin xyz=\"0 0 0\"/>\n    <axis xyz=\"-1 0 0\"/>",
+        1,
+    );
+    assert!(xml != shipped_robot(), "the actuator's axis was flipped");
+    let robot = RobotSpec::from_str(&xml, Path::new("robots/bad.urdf")).expect("robot");
+    let scenario = Scenario::from_str(
+        "robot = \"x\"\nduration = 1\n[controller]\nsensor = \"encoder\"\nactuator = \"drive\"\nk = 6e4\nc = 100\n",
+        Path::new("s.toml"),
+    )
+    .expect("scenario");
+    let message = assemble(robot, &scenario).expect_err("refused").to_string();
+    assert_mentions(
+        &message,
+        &["controller", "positive feedback", "encoder", "drive"],
+    );
 }

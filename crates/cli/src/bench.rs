@@ -156,6 +156,13 @@ fn max_deviation(
 /// Runs the benchmark and prints Markdown.
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     anyhow::ensure!(args.repeat >= 1, "--repeat must be at least 1, got 0");
+    let suite = Path::new("scenarios/paper/fig05b_fi.toml");
+    if args.scenario.is_none() && !suite.is_file() {
+        anyhow::bail!(
+            "the default suite reads the repository's scenarios/ ({} is not here): run it from the repository root, or give --scenario FILE",
+            suite.display()
+        );
+    }
     if args.fmu {
         return crate::bench_fmu::fmu_table(&fmu_python(args), args.repeat.min(5));
     }

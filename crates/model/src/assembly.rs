@@ -512,6 +512,19 @@ impl<'a> Assembler<'a> {
                     "controller.actuator",
                     "actuator",
                 )?;
+                let (s, a) = (&sensors[sensor], &actuators[actuator]);
+                let gains = settings.k > 0.0 || settings.c > 0.0 || settings.k_i > 0.0;
+                if gains && s.body == a.body && s.axis.dot(&a.axis) < 0.0 {
+                    return Err(scenario.error(
+                        "controller",
+                        format!(
+                            "sensor \"{}\" and actuator \"{}\" act along opposite directions on the same body, so the servo would push away from its reference (positive feedback): flip one axis in {}",
+                            s.name,
+                            a.name,
+                            robot.file.display()
+                        ),
+                    ));
+                }
                 let integral_index = (settings.k_i > 0.0).then(|| {
                     let index = self.names.len();
                     self.push_state("controller.integral".into(), StateKind::ErrorIntegral, 1e-4);

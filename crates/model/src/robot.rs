@@ -686,8 +686,16 @@ impl ExtensionReader<'_> {
             .collect::<Result<_, _>>()
             .map_err(|_| self.error(element, format!("{place}: expected three numbers")))?;
         match values.as_slice() {
-            [a, b, c] if values.iter().all(|v| v.is_finite()) => Ok(Some([*a, *b, *c])),
-            _ => Err(self.error(element, format!("{place}: expected three finite numbers"))),
+            [a, b, c] if values.iter().all(|v| crate::rule::Rule::Finite.admits(*v)) => {
+                Ok(Some([*a, *b, *c]))
+            }
+            _ => Err(self.error(
+                element,
+                format!(
+                    "{place}: expected three finite numbers of magnitude at most {:e}",
+                    crate::rule::MAX_MAGNITUDE
+                ),
+            )),
         }
     }
 

@@ -655,28 +655,21 @@ impl Checker<'_> {
         Ok(())
     }
 
+    fn rule(&self, key: &str, value: f64, rule: Rule) -> Result<(), LoadError> {
+        rule.check(value)
+            .map_err(|e| self.error(key, e.to_string()))
+    }
+
     fn finite(&self, key: &str, value: f64) -> Result<(), LoadError> {
-        if value.is_finite() {
-            Ok(())
-        } else {
-            Err(self.error(key, format!("must be finite, got {value}")))
-        }
+        self.rule(key, value, Rule::Finite)
     }
 
     fn positive(&self, key: &str, value: f64) -> Result<(), LoadError> {
-        if value.is_finite() && value > 0.0 {
-            Ok(())
-        } else {
-            Err(self.error(key, format!("must be > 0, got {value}")))
-        }
+        self.rule(key, value, Rule::Positive)
     }
 
     fn non_negative(&self, key: &str, value: f64) -> Result<(), LoadError> {
-        if value.is_finite() && value >= 0.0 {
-            Ok(())
-        } else {
-            Err(self.error(key, format!("must be >= 0, got {value}")))
-        }
+        self.rule(key, value, Rule::NonNegative)
     }
 
     /// The `[reference]` table, key by key: `kind` (default `constant`) then

@@ -227,6 +227,7 @@ impl Pace {
         if projected > PACE_MARGIN * max_steps as f64 {
             return Err(SimError::StepSizeCollapse {
                 t,
+                t_end,
                 h: advanced / (steps - self.since_steps) as f64,
                 projected,
                 max_steps,

@@ -663,6 +663,7 @@ impl Engine for RapierEngine {
             if let Some(i) = x.iter().position(|v| !v.is_finite()) {
                 return Err(SimError::NonFinite {
                     t: t_sample,
+                    dt,
                     state: model.layout().names[i].clone(),
                 });
             }

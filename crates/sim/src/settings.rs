@@ -62,11 +62,13 @@ pub enum SimError {
     /// The step size collapsed: at its recent pace the run would need far
     /// more steps than its budget.
     #[error(
-        "the step size collapsed to {h:.3e} s at t = {t:.6} s: at this pace the run needs about {projected:.3e} steps, more than four times solver.max_steps = {max_steps} (the model changes faster than the tolerance allows there: check its parameters, or loosen solver.rtol)"
+        "the step size collapsed to {h:.3e} s at t = {t:.6} s: at this pace the run to t = {t_end:e} s (its duration) needs about {projected:.3e} steps, more than four times solver.max_steps = {max_steps} (the model changes faster than the tolerance allows there: check its parameters and duration, or loosen solver.rtol)"
     )]
     StepSizeCollapse {
         /// Time reached, s.
         t: f64,
+        /// Where the run was to end, s.
+        t_end: f64,
         /// Mean step over the last window, s.
         h: f64,
         /// Steps the run would need at that pace.
@@ -94,11 +96,13 @@ pub enum SimError {
     InvalidSettings(String),
     /// A fixed-step engine produced a non-finite state.
     #[error(
-        "state \"{state}\" became non-finite at t = {t:.9} s (the fixed step is too long for this model)"
+        "state \"{state}\" became non-finite at t = {t:.9} s (the fixed step rapier.dt = {dt:.3e} s is too long for this model)"
     )]
     NonFinite {
         /// Time reached, s.
         t: f64,
+        /// The fixed step, s.
+        dt: f64,
         /// Name of the first non-finite state.
         state: String,
     },
