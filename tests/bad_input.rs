@@ -375,3 +375,27 @@ fn a_servo_with_opposite_axes_is_refused() {
         &["controller", "positive feedback", "encoder", "drive"],
     );
 }
+
+/// A singular force balance names the coordinate that nothing holds (a rail
+/// turned into a hinge leaves its bearing free to swing).
+#[test]
+fn a_singular_balance_names_the_free_coordinate() {
+    let xml = std::fs::read_to_string(path("robots/stage_4fi.urdf"))
+        .expect("robot")
+        .replacen(
+            "<joint name=\"rail_fl\" type=\"prismatic\">",
+            "<joint name=\"rail_fl\" type=\"revolute\">",
+            1,
+        );
+    let robot = RobotSpec::from_str(&xml, Path::new("robots/hinge.urdf")).expect("robot");
+    let scenario = Scenario::from_str(
+        "robot = \"x\"\nduration = 1\nstart = \"static\"\n[controller]\nsensor = \"encoder\"\nactuator = \"drive\"\nk = 6e4\nc = 100\n",
+        Path::new("s.toml"),
+    )
+    .expect("scenario");
+    let (_, model) = assemble(robot, &scenario).expect("model");
+    let error = fistage_sim::initial_state(&model, &scenario)
+        .expect_err("no static equilibrium")
+        .to_string();
+    assert_mentions(&error, &["singular", "rail_fl"]);
+}

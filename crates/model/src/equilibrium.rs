@@ -44,11 +44,13 @@ pub enum EquilibriumError {
     /// The linearised balance is singular (e.g. a free degree of freedom with no
     /// stiffness holding it).
     #[error(
-        "no {kind:?} equilibrium: the force balance is singular (a degree of freedom is not held by any stiffness)"
+        "no {kind:?} equilibrium: the force balance is singular (a degree of freedom is not held by any stiffness; the free direction is mostly \"{free}\")"
     )]
     Singular {
         /// Kind sought.
         kind: EquilibriumKind,
+        /// The coordinate that moves most along the balance's null direction.
+        free: String,
     },
 }
 
@@ -134,8 +136,11 @@ impl Model {
                     }
                 }
             }
-            let Some(solution) = system.lu().solve(&(-residual)) else {
-                return Err(EquilibriumError::Singular { kind });
+            let Some(solution) = system.clone().lu().solve(&(-residual)) else {
+                return Err(EquilibriumError::Singular {
+                    kind,
+                    free: free_coordinate(&system, &unknowns, &tangent.names),
+                });
             };
             let mut step = vec![0.0; n];
             for (value, &unknown) in solution.iter().zip(&unknowns) {
@@ -156,6 +161,28 @@ impl Model {
             step: last_step,
         })
     }
+}
+
+/// The name of the unknown that dominates the null direction of a singular
+/// balance (the right singular vector of the smallest singular value).
+fn free_coordinate(system: &DMatrix<f64>, unknowns: &[usize], names: &[String]) -> String {
+    let svd = system.clone().svd(false, true);
+    let Some(v_t) = svd.v_t else {
+        return "unknown".into();
+    };
+    if svd.singular_values.is_empty() {
+        return "unknown".into();
+    }
+    let smallest = svd.singular_values.iamin();
+    let row = v_t.row(smallest);
+    let column = (0..row.len())
+        .max_by(|&a, &b| row[a].abs().total_cmp(&row[b].abs()))
+        .unwrap_or(0);
+    unknowns
+        .get(column)
+        .and_then(|&u| names.get(u))
+        .cloned()
+        .unwrap_or_else(|| "unknown".into())
 }
 
 fn tangent_index(tangent: &crate::linearize::Tangent, name: &str) -> Option<usize> {

@@ -543,7 +543,7 @@ impl Scenario {
             return Err(checker.error(
                 "output.sample_rate",
                 format!(
-                    "{sample_rate} Hz over {} s is {samples:.3e} samples; at most {MAX_SAMPLES:e}",
+                    "{sample_rate} Hz over the duration of {} s is {samples:.3e} samples; at most {MAX_SAMPLES:e}",
                     raw.duration
                 ),
             ));
