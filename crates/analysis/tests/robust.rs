@@ -344,3 +344,52 @@ fn simulated_samples_carry_the_yaw_of_a_floating_table() {
     assert!(result.outcome.yaw_amplitude.is_none());
     assert!(result.outcome.amplitude.is_some() && result.outcome.stable_linear.is_some());
 }
+
+mod integral {
+    use super::*;
+    use fistage_analysis::robust::tune::{Criterion, Population, TuneSettings, tune};
+
+    /// With an integral gain in the servo, tune raises k_i as far as every
+    /// stage allows at the chosen (k, c): 5% more makes a stage unstable.
+    /// (The integral mode sits near -k_i / k, so no margin beyond it can
+    /// be asked; the criterion here is plain stability.)
+    #[test]
+    fn the_integral_gain_is_raised_to_its_limit() {
+        let table = "[robust]\nsamples = 16\nseed = 2\n\
+                     [[robust.parameter]]\nparameter = \"overrides.bearing_friction.f_s\"\ndistribution = \"normal\"\nsd = 0.05\n";
+        let text = format!(
+            "robot = {:?}\nduration = 1.0\n[platform]\nvelocity = 0.02\n[controller]\nsensor = \"encoder\"\nactuator = \"drive\"\nk = 6e4\nc = 100\nk_i = 100\n{table}",
+            root()
+                .join("robots/stage_1dof_fi.urdf")
+                .display()
+                .to_string()
+        );
+        let scenario = Scenario::from_str(&text, Path::new("robust.toml")).expect("scenario");
+        let robot_file = RobotSpec::from_file(&scenario.robot).expect("robot");
+        let (robot, model) = assemble(robot_file.clone(), &scenario).expect("model");
+        let loaded = Loaded {
+            scenario: scenario.clone(),
+            robot,
+            model,
+        };
+        let spec = RobustSpec::from_scenario(&scenario, &robot_file, None, None).expect("spec");
+        let population = Population::draw(&spec, &loaded, &robot_file, 16);
+        let criterion = Criterion::Margin(0.0);
+        let settings = TuneSettings {
+            k_range: [1e3, 1e6],
+            c_range: [10.0, 1e3],
+            points: 10,
+            criterion,
+        };
+        let tuning = tune(&population, &loaded, &robot_file, &settings, &|_| {});
+        let gains = tuning.gains.expect("gains");
+        let k_i = tuning.k_i.expect("an integral gain");
+        println!("gains {gains:?}, k_i {k_i:.4e}");
+        assert!(k_i >= 100.0);
+        let path = ["controller.k_i".to_string()];
+        let at = |factor: f64| population.standing(Some(gains), &path, factor * k_i / 100.0);
+        assert!(at(1.0).admits(criterion), "{:?}", at(1.0));
+        assert!(k_i < 1e8, "the limit lies inside the searched range");
+        assert!(!at(1.05).admits(criterion), "{:?}", at(1.05));
+    }
+}

@@ -179,6 +179,9 @@ fn report(tuning: &Tuning, out_dir: &std::path::Path) {
     match (tuning.gains, tuning.standing, tuning.bandwidth_hz) {
         (Some([k, c]), Some(s), Some(bandwidth)) => {
             println!("gains for {what}: k = {k:.6e} N/m, c = {c:.6e} N s/m");
+            if let Some(k_i) = tuning.k_i {
+                println!("integral gain: up to k_i = {k_i:.6e} N/(m s) at these k and c");
+            }
             println!(
                 "bandwidth sqrt(k/M)/2pi = {bandwidth:.2} Hz (M = {:.4} kg); worst largest real part {:.4e} 1/s, {} of {} unstable",
                 tuning.moving_mass, s.worst_max_real_eig, s.unstable, s.members

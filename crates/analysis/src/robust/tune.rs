@@ -9,7 +9,9 @@
 //!
 //! The search maps the worst largest real part over the population on a
 //! log grid of (k, c), then refines k by bisection at the edge of the
-//! admissible region. When no gains in the range are admissible (a mode the
+//! admissible region. When the servo has an integral gain, the search holds
+//! the scenario's k_i and then raises it as far as the criterion allows at
+//! the chosen (k, c) (up to a million times). When no gains in the range are admissible (a mode the
 //! servo cannot reach, such as the anti-phase bearing modes of the
 //! four-bearing stage), it says so and finds by how much one element
 //! parameter at a time (isolator damping, isolator stiffness, bearing mass)
@@ -106,7 +108,12 @@ pub struct Tuning {
     pub refused: usize,
     /// The chosen gains (k, c), when admissible gains exist.
     pub gains: Option<[f64; 2]>,
-    /// The population at those gains.
+    /// With an integral gain in the scenario's servo: the largest k_i (up to
+    /// a million times the scenario's) that keeps the criterion at the chosen
+    /// (k, c), found after them (the search of k and c holds the scenario's
+    /// k_i), N/(m s).
+    pub k_i: Option<f64>,
+    /// The population at those gains (with the scenario's k_i).
     pub standing: Option<Standing>,
     /// Natural frequency sqrt(k / M) / 2 pi of the chosen servo, Hz.
     pub bandwidth_hz: Option<f64>,
@@ -313,6 +320,13 @@ pub fn tune(
         }
     };
     let mass = moving_mass(base);
+    let scenario_k_i = base.scenario.controller.as_ref().map_or(0.0, |c| c.k_i);
+    let k_i = match gains {
+        Some(at) if scenario_k_i > 0.0 => {
+            Some(scenario_k_i * largest_integral_factor(population, at, criterion))
+        }
+        _ => None,
+    };
     let remedies = if gains.is_none() {
         let coarse = |range| log_grid(range, settings.points.min(8));
         remedies(
@@ -330,6 +344,7 @@ pub fn tune(
         members: population.len(),
         refused: population.refused,
         gains,
+        k_i,
         standing,
         bandwidth_hz: gains.map(|[kv, _]| (kv / mass).sqrt() / std::f64::consts::TAU),
         moving_mass: mass,
@@ -338,6 +353,26 @@ pub fn tune(
         grid,
         remedies,
     }
+}
+
+/// The largest factor (1 to 1e6) on every member's integral gain that keeps
+/// the criterion at gains `at`, by bisection in log.
+fn largest_integral_factor(population: &Population, at: [f64; 2], criterion: Criterion) -> f64 {
+    let path = ["controller.k_i".to_string()];
+    let admits = |f: f64| population.standing(Some(at), &path, f).admits(criterion);
+    let (mut lo, mut hi) = (1.0f64, 1e6f64);
+    if admits(hi) {
+        return hi;
+    }
+    for _ in 0..24 {
+        let mid = (lo * hi).sqrt();
+        if admits(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
 }
 
 /// The element parameters tried when no gains suffice, as (what, paths).
