@@ -69,6 +69,27 @@ pub struct Outcome {
 }
 
 impl Assessment {
+    /// Checks the settings read from the scenario's `[table]`: a
+    /// non-negative threshold, and a positive duration whose samples fit in
+    /// memory. Errors name `table.oscillation_threshold` or `table.duration`.
+    pub fn check(&self, scenario: &Scenario, table: &str) -> Result<(), LoadError> {
+        let threshold = self.oscillation_threshold;
+        if !(threshold.is_finite() && threshold >= 0.0) {
+            return Err(scenario.error(
+                format!("{table}.oscillation_threshold"),
+                format!("must be >= 0, got {threshold}"),
+            ));
+        }
+        if let Some(d) = self.duration {
+            let key = format!("{table}.duration");
+            if !(d.is_finite() && d > 0.0) {
+                return Err(scenario.error(key, format!("must be > 0, got {d}")));
+            }
+            check_duration(scenario, d).map_err(|why| scenario.error(key, why))?;
+        }
+        Ok(())
+    }
+
     /// The analyses at one point.
     pub fn assess(&self, loaded: &Loaded) -> Outcome {
         let mut outcome = Outcome::default();

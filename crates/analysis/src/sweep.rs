@@ -174,21 +174,7 @@ impl SweepSpec {
                 ),
             ));
         }
-        if !(spec.oscillation_threshold.is_finite() && spec.oscillation_threshold >= 0.0) {
-            return Err(scenario.error(
-                "sweep.oscillation_threshold",
-                format!("must be >= 0, got {}", spec.oscillation_threshold),
-            ));
-        }
-        if let Some(d) = spec.duration
-            && !(d.is_finite() && d > 0.0)
-        {
-            return Err(scenario.error("sweep.duration", format!("must be > 0, got {d}")));
-        }
-        if let Some(d) = spec.duration {
-            crate::assess::check_duration(scenario, d)
-                .map_err(|why| scenario.error("sweep.duration", why))?;
-        }
+        spec.assessment().check(scenario, "sweep")?;
         Ok(spec)
     }
 

@@ -67,13 +67,10 @@ pub fn run(args: &ModesArgs) -> anyhow::Result<()> {
             .with_context(|| format!("{}: modal analysis", args.scenario.display()))?;
         analyses.push(analysis);
     }
-    let out_dir = args.out.clone().unwrap_or_else(|| {
-        let stem = args
-            .scenario
-            .file_stem()
-            .map_or("modes".into(), |s| s.to_string_lossy().into_owned());
-        PathBuf::from("out").join(format!("{stem}-modes"))
-    });
+    let out_dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| crate::output::default_folder(&args.scenario, "modes"));
     let folder = OutputFolder::begin(&out_dir, args.force)?;
     let staging = folder.path();
     let json = serde_json::json!({

@@ -97,6 +97,14 @@ impl OutputFolder {
     }
 }
 
+/// `out/<scenario stem>-<command>`, the folder a command writes without `--out`.
+pub fn default_folder(scenario: &Path, command: &str) -> PathBuf {
+    let stem = scenario
+        .file_stem()
+        .map_or(command.into(), |s| s.to_string_lossy().into_owned());
+    PathBuf::from("out").join(format!("{stem}-{command}"))
+}
+
 /// Whether `target` is a folder that holds any file (an earlier result).
 pub fn holds_files(target: &Path) -> bool {
     std::fs::read_dir(target).is_ok_and(|mut entries| entries.next().is_some())

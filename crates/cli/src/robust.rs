@@ -79,13 +79,10 @@ pub fn run(args: &RobustArgs) -> anyhow::Result<()> {
     let loaded = fistage_model::load(&args.scenario)?;
     let robot_file = RobotSpec::from_file(&loaded.scenario.robot)?;
     let spec = RobustSpec::from_scenario(&loaded.scenario, &robot_file, args.samples, args.seed)?;
-    let out_dir = args.out.clone().unwrap_or_else(|| {
-        let stem = args
-            .scenario
-            .file_stem()
-            .map_or("robust".into(), |s| s.to_string_lossy().into_owned());
-        PathBuf::from("out").join(format!("{stem}-robust"))
-    });
+    let out_dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| crate::output::default_folder(&args.scenario, "robust"));
     let provenance = Provenance::of_study(
         "robust",
         &loaded.scenario.file,

@@ -78,13 +78,10 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
     let spec = SweepSpec::from_scenario(&loaded.scenario)?;
     let robot_file = RobotSpec::from_file(&loaded.scenario.robot)?;
     spec.check_against(&loaded.scenario, &robot_file)?;
-    let out_dir = args.out.clone().unwrap_or_else(|| {
-        let stem = args
-            .scenario
-            .file_stem()
-            .map_or("sweep".into(), |s| s.to_string_lossy().into_owned());
-        PathBuf::from("out").join(format!("{stem}-sweep"))
-    });
+    let out_dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| crate::output::default_folder(&args.scenario, "sweep"));
     let provenance = Provenance::of_study(
         "sweep",
         &loaded.scenario.file,

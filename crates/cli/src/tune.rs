@@ -91,13 +91,10 @@ pub fn run(args: &TuneArgs) -> anyhow::Result<()> {
     let robot_file = RobotSpec::from_file(&loaded.scenario.robot)?;
     let spec =
         RobustSpec::from_scenario(&loaded.scenario, &robot_file, Some(args.samples), args.seed)?;
-    let out_dir = args.out.clone().unwrap_or_else(|| {
-        let stem = args
-            .scenario
-            .file_stem()
-            .map_or("tune".into(), |s| s.to_string_lossy().into_owned());
-        PathBuf::from("out").join(format!("{stem}-tune"))
-    });
+    let out_dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| crate::output::default_folder(&args.scenario, "tune"));
     let folder = OutputFolder::begin(&out_dir, args.force)?;
     let population = Population::draw(&spec, &loaded, &robot_file, args.samples);
     if population.is_empty() {

@@ -220,21 +220,12 @@ impl RobustSpec {
                 "no [[robust.parameter]]: nothing is toleranced",
             ));
         }
-        if !(raw.oscillation_threshold.is_finite() && raw.oscillation_threshold >= 0.0) {
-            return Err(scenario.error(
-                "robust.oscillation_threshold",
-                format!("must be >= 0, got {}", raw.oscillation_threshold),
-            ));
-        }
-        if let Some(d) = raw.duration
-            && !(d.is_finite() && d > 0.0)
-        {
-            return Err(scenario.error("robust.duration", format!("must be > 0, got {d}")));
-        }
-        if let Some(d) = raw.duration {
-            crate::assess::check_duration(scenario, d)
-                .map_err(|why| scenario.error("robust.duration", why))?;
-        }
+        let assessment = Assessment {
+            analysis: raw.analysis,
+            duration: raw.duration,
+            oscillation_threshold: raw.oscillation_threshold,
+        };
+        assessment.check(scenario, "robust")?;
         let mut dimensions: Vec<Dimension> = Vec::new();
         for (k, entry) in raw.parameters.iter().enumerate() {
             let key = format!("robust.parameter[{k}]");
@@ -270,11 +261,7 @@ impl RobustSpec {
             samples,
             seed,
             sampling: raw.sampling,
-            assessment: Assessment {
-                analysis: raw.analysis,
-                duration: raw.duration,
-                oscillation_threshold: raw.oscillation_threshold,
-            },
+            assessment,
             dimensions,
             design,
         })
