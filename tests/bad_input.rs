@@ -399,3 +399,52 @@ fn a_singular_balance_names_the_free_coordinate() {
         .to_string();
     assert_mentions(&error, &["singular", "rail_fl"]);
 }
+
+/// The circle and staircase references read their keys, and refuse bad ones
+/// by name.
+#[test]
+fn circle_and_staircase_references_are_read_and_checked() {
+    let base = "robot = \"r.urdf\"\nduration = 1\n";
+    let read =
+        |reference: &str| Scenario::from_str(&format!("{base}{reference}"), Path::new("s.toml"));
+    let circle =
+        read("[reference]\nkind = \"circle\"\nradius = 0.02\ntangential_velocity = 0.05\n")
+            .expect("circle");
+    assert_eq!(
+        circle.reference,
+        fistage_model::reference::Reference::Circle {
+            radius: 0.02,
+            tangential_velocity: 0.05
+        }
+    );
+    let stairs = read(
+        "[reference]\nkind = \"staircase\"\nstep = 50e-6\nmove_time = 0.05\ndwell = 0.2\nsteps = 4\nprofile = \"trapezoidal\"\n",
+    )
+    .expect("staircase");
+    assert!((stairs.reference.sample(10.0).position - 200e-6).abs() < 1e-15);
+    for (reference, needles) in [
+        (
+            "[reference]\nkind = \"circle\"\nradius = 0\ntangential_velocity = 0.05\n",
+            &["reference.radius"][..],
+        ),
+        (
+            "[reference]\nkind = \"circle\"\nradius = 0.02\n",
+            &["reference.tangential_velocity", "missing"],
+        ),
+        (
+            "[reference]\nkind = \"staircase\"\nstep = 1e-6\nmove_time = 0.1\ndwell = 0\nsteps = 2.5\n",
+            &["reference.steps", "whole number"],
+        ),
+        (
+            "[reference]\nkind = \"staircase\"\nstep = 1e-6\nmove_time = 0.1\ndwell = 0\nprofile = \"s-curve\"\n",
+            &["reference.profile", "s-curve"],
+        ),
+        (
+            "[reference]\nkind = \"staircase\"\nstep = 1e-6\nmove_time = 0.1\ndwell = -1\n",
+            &["reference.dwell"],
+        ),
+    ] {
+        let message = read(reference).expect_err("refused").to_string();
+        assert_mentions(&message, needles);
+    }
+}

@@ -65,6 +65,34 @@ pub enum Reference {
         /// Signed move length, m.
         distance: f64,
     },
+    /// The x axis of a circle test: x_r = R sin(v t / R), the tangential
+    /// velocity v reversing the x motion every half turn (the quadrant glitches
+    /// of a circle test happen there).
+    Circle {
+        /// Radius R, m.
+        radius: f64,
+        /// Tangential velocity v, m/s.
+        tangential_velocity: f64,
+    },
+    /// A staircase of `steps` point-to-point moves of `step` each, the first
+    /// starting at `start`, each lasting `move_time` and followed by a rest of
+    /// `dwell`.
+    Staircase {
+        /// Start of the first move, s.
+        start: f64,
+        /// Position before the first move, m.
+        initial: f64,
+        /// Signed length of every move, m.
+        step: f64,
+        /// Duration of every move, s.
+        move_time: f64,
+        /// Rest after every move, s.
+        dwell: f64,
+        /// Number of moves.
+        steps: usize,
+        /// Shape of every move.
+        profile: MoveProfile,
+    },
     /// A sampled trajectory, interpolated by piecewise cubic Hermite polynomials
     /// with centred-difference slopes (continuous position and velocity), held
     /// constant outside the samples.
@@ -74,6 +102,49 @@ pub enum Reference {
         /// Positions, m.
         positions: Vec<f64>,
     },
+}
+
+/// The shape of a point-to-point move.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MoveProfile {
+    /// Quintic: zero velocity and acceleration at both ends.
+    MinimumJerk,
+    /// Constant acceleration over the first quarter of the move, constant
+    /// velocity over the middle half, constant deceleration over the last quarter.
+    Trapezoidal,
+}
+
+impl MoveProfile {
+    /// (fraction of the distance, its rate per unit of normalised time) at
+    /// normalised time tau in [0, 1].
+    fn shape(self, tau: f64) -> (f64, f64) {
+        match self {
+            Self::MinimumJerk => (
+                tau * tau * tau * (10.0 - 15.0 * tau + 6.0 * tau * tau),
+                30.0 * tau * tau * (1.0 - tau) * (1.0 - tau),
+            ),
+            Self::Trapezoidal => {
+                // Peak rate 4/3 reached at tau = 1/4, held to 3/4.
+                let peak = 4.0 / 3.0;
+                if tau < 0.25 {
+                    (0.5 * peak * tau * tau / 0.25, peak * tau / 0.25)
+                } else if tau <= 0.75 {
+                    (peak * (tau - 0.125), peak)
+                } else {
+                    let rest = 1.0 - tau;
+                    (1.0 - 0.5 * peak * rest * rest / 0.25, peak * rest / 0.25)
+                }
+            }
+        }
+    }
+
+    /// Normalised times where the acceleration jumps.
+    fn corners(self) -> &'static [f64] {
+        match self {
+            Self::MinimumJerk => &[],
+            Self::Trapezoidal => &[0.25, 0.75],
+        }
+    }
 }
 
 impl Default for Reference {
@@ -142,6 +213,51 @@ impl Reference {
                     velocity: distance * slope / duration,
                 }
             }
+            Self::Circle {
+                radius,
+                tangential_velocity,
+            } => {
+                let angle = tangential_velocity * t / radius;
+                ReferenceSample {
+                    position: radius * angle.sin(),
+                    velocity: tangential_velocity * angle.cos(),
+                }
+            }
+            Self::Staircase {
+                start,
+                initial,
+                step,
+                move_time,
+                dwell,
+                steps,
+                profile,
+            } => {
+                let period = move_time + dwell;
+                let since = t - start;
+                if since <= 0.0 {
+                    return ReferenceSample {
+                        position: initial,
+                        velocity: 0.0,
+                    };
+                }
+                let k = ((since / period).floor() as usize).min(steps);
+                if k == steps {
+                    return ReferenceSample {
+                        position: initial + step * steps as f64,
+                        velocity: 0.0,
+                    };
+                }
+                let tau = ((since - k as f64 * period) / move_time).min(1.0);
+                let (fraction, rate) = profile.shape(tau);
+                ReferenceSample {
+                    position: initial + step * (k as f64 + fraction),
+                    velocity: if tau < 1.0 {
+                        step * rate / move_time
+                    } else {
+                        0.0
+                    },
+                }
+            }
             Self::Samples {
                 ref times,
                 ref positions,
@@ -166,6 +282,21 @@ impl Reference {
             Self::PointToPoint {
                 start, duration, ..
             } => vec![start, start + duration],
+            Self::Staircase {
+                start,
+                move_time,
+                dwell,
+                steps,
+                profile,
+                ..
+            } => (0..steps)
+                .flat_map(|k| {
+                    let begin = start + k as f64 * (move_time + dwell);
+                    std::iter::once(begin)
+                        .chain(profile.corners().iter().map(move |c| begin + c * move_time))
+                        .chain(std::iter::once(begin + move_time))
+                })
+                .collect(),
             Self::Samples { ref times, .. } => {
                 let mut ends = Vec::new();
                 if let (Some(&first), Some(&last)) = (times.first(), times.last()) {
@@ -396,5 +527,90 @@ mod tests {
         assert_eq!(unit_scale("time_ms", "time"), Some(1e-3));
         assert_eq!(unit_scale("position_furlong", "position"), None);
         assert_eq!(unit_scale("positions", "position"), None);
+    }
+
+    /// The velocity of a reference is the derivative of its position
+    /// (central differences), away from its breakpoints.
+    fn assert_consistent(reference: &Reference, t_end: f64) {
+        let breaks = reference.breakpoints();
+        let h = 1e-7;
+        for i in 1..2000 {
+            let t = t_end * i as f64 / 2000.0;
+            if breaks.iter().any(|b| (b - t).abs() < 10.0 * h) {
+                continue;
+            }
+            let slope =
+                (reference.sample(t + h).position - reference.sample(t - h).position) / (2.0 * h);
+            let v = reference.sample(t).velocity;
+            assert!(
+                (slope - v).abs() <= 1e-6 * v.abs().max(1e-3),
+                "t = {t}: {slope} vs {v}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_circle_test_reverses_at_each_half_turn() {
+        let circle = Reference::Circle {
+            radius: 0.02,
+            tangential_velocity: 0.05,
+        };
+        let quarter = std::f64::consts::FRAC_PI_2 * 0.02 / 0.05;
+        let top = circle.sample(quarter);
+        assert!((top.position - 0.02).abs() < 1e-15 && top.velocity.abs() < 1e-15);
+        assert!((circle.sample(0.0).velocity - 0.05).abs() < 1e-15);
+        assert!(circle.sample(3.0 * quarter).position < -0.0199);
+        assert_consistent(&circle, 8.0 * quarter);
+    }
+
+    #[test]
+    fn a_staircase_rests_on_each_step() {
+        for profile in [MoveProfile::MinimumJerk, MoveProfile::Trapezoidal] {
+            let stairs = Reference::Staircase {
+                start: 0.1,
+                initial: 1e-3,
+                step: 50e-6,
+                move_time: 0.05,
+                dwell: 0.2,
+                steps: 4,
+                profile,
+            };
+            for k in 0..4 {
+                let resting = stairs.sample(0.1 + k as f64 * 0.25 + 0.1);
+                let expected = 1e-3 + 50e-6 * (k + 1) as f64;
+                assert!(
+                    (resting.position - expected).abs() < 1e-15,
+                    "{profile:?} step {k}"
+                );
+                assert_eq!(resting.velocity, 0.0);
+            }
+            assert_eq!(stairs.sample(0.05).position, 1e-3);
+            assert!((stairs.sample(5.0).position - (1e-3 + 200e-6)).abs() < 1e-15);
+            assert_consistent(&stairs, 1.2);
+            let peak = (0..1000)
+                .map(|i| stairs.sample(0.1 + 0.05 * i as f64 / 1000.0).velocity)
+                .fold(0.0, f64::max);
+            let expected = match profile {
+                MoveProfile::MinimumJerk => 1.875 * 50e-6 / 0.05,
+                MoveProfile::Trapezoidal => 4.0 / 3.0 * 50e-6 / 0.05,
+            };
+            assert!(
+                (peak - expected).abs() < 1e-3 * expected,
+                "{profile:?}: {peak} vs {expected}"
+            );
+        }
+        let trapezoid = Reference::Staircase {
+            start: 0.0,
+            initial: 0.0,
+            step: 1.0,
+            move_time: 1.0,
+            dwell: 1.0,
+            steps: 2,
+            profile: MoveProfile::Trapezoidal,
+        };
+        assert_eq!(
+            trapezoid.breakpoints(),
+            vec![0.0, 0.25, 0.75, 1.0, 2.0, 2.25, 2.75, 3.0]
+        );
     }
 }

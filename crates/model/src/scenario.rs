@@ -32,7 +32,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use crate::error::LoadError;
-use crate::reference::Reference;
+use crate::reference::{MoveProfile, Reference};
 use crate::rule::Rule;
 
 /// The scenario file as written, before checks.
@@ -198,6 +198,19 @@ enum ReferenceFile {
         file: PathBuf,
         time_column: String,
         position_column: String,
+    },
+    Circle {
+        radius: f64,
+        tangential_velocity: f64,
+    },
+    Staircase {
+        start: f64,
+        initial: f64,
+        step: f64,
+        move_time: f64,
+        dwell: f64,
+        steps: f64,
+        profile: String,
     },
 }
 
@@ -692,10 +705,22 @@ impl Checker<'_> {
             "sine" => &["amplitude", "frequency", "phase", "offset"],
             "p2p" | "point_to_point" => &["start", "duration", "initial", "distance"],
             "csv" => &["file", "time_column", "position_column"],
+            "circle" => &["radius", "tangential_velocity"],
+            "staircase" => &[
+                "start",
+                "initial",
+                "step",
+                "move_time",
+                "dwell",
+                "steps",
+                "profile",
+            ],
             other => {
                 return Err(self.error(
                     "reference.kind",
-                    format!("unknown kind \"{other}\" (constant, step, ramp, sine, p2p or csv)"),
+                    format!(
+                        "unknown kind \"{other}\" (constant, step, ramp, sine, p2p, circle, staircase or csv)"
+                    ),
                 ));
             }
         };
@@ -759,6 +784,19 @@ impl Checker<'_> {
                 frequency: number("frequency", None)?,
                 phase: number("phase", Some(0.0))?,
                 offset: number("offset", Some(0.0))?,
+            },
+            "circle" => ReferenceFile::Circle {
+                radius: number("radius", None)?,
+                tangential_velocity: number("tangential_velocity", None)?,
+            },
+            "staircase" => ReferenceFile::Staircase {
+                start: number("start", Some(0.0))?,
+                initial: number("initial", Some(0.0))?,
+                step: number("step", None)?,
+                move_time: number("move_time", None)?,
+                dwell: number("dwell", None)?,
+                steps: number("steps", Some(1.0))?,
+                profile: text("profile", Some("minimum_jerk"))?,
             },
             "csv" => ReferenceFile::Csv {
                 file: PathBuf::from(text("file", None)?),
@@ -847,6 +885,57 @@ impl Checker<'_> {
                 time_column,
                 position_column,
             } => Reference::from_csv(&base.join(file), &time_column, &position_column)?,
+            ReferenceFile::Circle {
+                radius,
+                tangential_velocity,
+            } => {
+                self.positive("reference.radius", radius)?;
+                self.finite("reference.tangential_velocity", tangential_velocity)?;
+                Reference::Circle {
+                    radius,
+                    tangential_velocity,
+                }
+            }
+            ReferenceFile::Staircase {
+                start,
+                initial,
+                step,
+                move_time,
+                dwell,
+                steps,
+                profile,
+            } => {
+                self.non_negative("reference.start", start)?;
+                self.finite("reference.initial", initial)?;
+                self.finite("reference.step", step)?;
+                self.positive("reference.move_time", move_time)?;
+                self.non_negative("reference.dwell", dwell)?;
+                if !(steps.fract() == 0.0 && (1.0..=1e6).contains(&steps)) {
+                    return Err(self.error(
+                        "reference.steps",
+                        format!("must be a whole number from 1 to 1000000, got {steps}"),
+                    ));
+                }
+                let profile = match profile.as_str() {
+                    "minimum_jerk" | "min_jerk" => MoveProfile::MinimumJerk,
+                    "trapezoidal" => MoveProfile::Trapezoidal,
+                    other => {
+                        return Err(self.error(
+                            "reference.profile",
+                            format!("unknown profile \"{other}\" (minimum_jerk or trapezoidal)"),
+                        ));
+                    }
+                };
+                Reference::Staircase {
+                    start,
+                    initial,
+                    step,
+                    move_time,
+                    dwell,
+                    steps: steps as usize,
+                    profile,
+                }
+            }
         })
     }
 
