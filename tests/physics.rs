@@ -259,3 +259,48 @@ fn fixed_joints_merge_inertia_correctly() {
     let expected = 2.0 * 0.4 / izz_pivot;
     assert!((dx[1] - expected).abs() < 1e-12, "{} vs {expected}", dx[1]);
 }
+
+/// Staircase tracking of the rigid stage (Table 1 friction): a PD servo
+/// stops each 50 um step short by a stiction offset of order f / k (here
+/// micrometres), so no step settles into +-50 nm; integral action removes the
+/// offset and every step settles, later for a weaker integral gain.
+#[test]
+fn integral_action_lets_staircase_steps_settle() {
+    let settle = |k_i: f64| {
+        let text = format!(
+            "robot = {:?}\nduration = 1.6\n[controller]\nsensor = \"encoder\"\nactuator = \"drive\"\nk = 1e6\nc = 2000\nk_i = {k_i:?}\n\
+             [reference]\nkind = \"staircase\"\nstep = 50e-6\nmove_time = 0.05\ndwell = 0.35\nsteps = 4\n",
+            fistage_tests::path("robots/stage_1dof_rigid.urdf")
+                .display()
+                .to_string()
+        );
+        let scenario =
+            fistage_model::Scenario::from_str(&text, std::path::Path::new("stairs.toml"))
+                .expect("scenario");
+        let robot = fistage_model::RobotSpec::from_file(&scenario.robot).expect("robot");
+        let (robot, model) = assemble(robot, &scenario).expect("model");
+        let loaded = fistage_model::Loaded {
+            scenario,
+            robot,
+            model,
+        };
+        let output = fistage_sim::run_scenario(&loaded, &mut |_| {}).expect("run");
+        output
+            .tracking
+            .expect("a servo")
+            .settling
+            .expect("a staircase")
+    };
+    let pd = settle(0.0);
+    assert_eq!((pd.unsettled, pd.times.values.len()), (4, 0), "{pd:?}");
+    let strong = settle(5e8);
+    let weak = settle(1e8);
+    assert_eq!(strong.unsettled, 0, "{strong:?}");
+    assert_eq!(weak.unsettled, 0, "{weak:?}");
+    let (s, w) = (
+        strong.times.mean.expect("mean"),
+        weak.times.mean.expect("mean"),
+    );
+    println!("mean settling: k_i = 5e8: {s:.4} s, k_i = 1e8: {w:.4} s");
+    assert!(s < w && s > 0.05, "{s} vs {w}");
+}

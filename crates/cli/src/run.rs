@@ -103,6 +103,9 @@ struct SummaryFile<'a> {
     window_s: [f64; 2],
     rtol: f64,
     solver: &'a fistage_sim::SolverStats,
+    /// With a servo: RMS error, peak errors at reference reversals, settling times.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    tracking: Option<&'a fistage_sim::TrackingMetrics>,
     signals: serde_json::Map<String, serde_json::Value>,
 }
 
@@ -124,6 +127,7 @@ fn write_summary(
         window_s: scenario.window,
         rtol: scenario.solver.rtol,
         solver: &output.trajectory.stats,
+        tracking: output.tracking.as_ref(),
         signals,
     };
     let text = serde_json::to_string_pretty(&summary)?;

@@ -319,6 +319,9 @@ impl SolverSettings {
     }
 }
 
+/// The settling band of staircase steps unless a scenario gives one, m.
+pub const DEFAULT_SETTLE_WINDOW: f64 = 50e-9;
+
 /// The tightest relative tolerance a double-precision run can honour.
 pub const MIN_RTOL: f64 = 1e-14;
 
@@ -399,6 +402,8 @@ struct OutputFile {
 #[serde(deny_unknown_fields)]
 struct StatisticsFile {
     window: Option<Vec<f64>>,
+    /// Half-width of the band a staircase step settles into, m.
+    settle_window: Option<f64>,
 }
 
 /// Where a run starts (before the `[initial]` entries are applied).
@@ -460,6 +465,9 @@ pub struct Scenario {
     pub signals: Option<Vec<String>>,
     /// Steady-state window for statistics, s.
     pub window: [f64; 2],
+    /// Half-width of the band around its target that a staircase step must
+    /// enter and stay in to count as settled, m (default 50 nm).
+    pub settle_window: f64,
     /// The raw `[sweep]` table, when present.
     pub sweep: Option<toml::Value>,
     /// The raw `[robust]` table (a tolerance analysis), when present.
@@ -527,6 +535,11 @@ impl Scenario {
             .sample_rate
             .unwrap_or_else(|| default_sample_rate(raw.duration));
         checker.positive("output.sample_rate", sample_rate)?;
+        let settle_window = raw
+            .statistics
+            .settle_window
+            .unwrap_or(DEFAULT_SETTLE_WINDOW);
+        checker.positive("statistics.settle_window", settle_window)?;
         let window = match raw.statistics.window.as_deref() {
             None => [raw.duration / 2.0, raw.duration],
             Some(&[from, to]) => [from, to],
@@ -594,6 +607,7 @@ impl Scenario {
             sample_rate,
             signals: raw.output.signals,
             window,
+            settle_window,
             sweep: raw.sweep,
             robust: raw.robust,
         })

@@ -47,6 +47,7 @@ pub mod rosenbrock;
 pub mod run;
 pub mod select;
 pub mod settings;
+pub mod tracking;
 pub mod trajectory;
 
 pub use cosim::{HeldInputs, Stepper, StepperTolerances};
@@ -58,4 +59,5 @@ pub use rapier_engine::RapierEngine;
 pub use run::{RunError, RunOutput, initial_state, initial_state_with, run_scenario, validate};
 pub use select::{engine_by_name, engine_for, engine_of_kind};
 pub use settings::{SimError, SimSettings, sample_times};
+pub use tracking::{TrackingMetrics, tracking_metrics};
 pub use trajectory::{ExtraSignal, SignalTable, SolverStats, Trajectory};

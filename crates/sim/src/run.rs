@@ -35,6 +35,8 @@ pub struct RunOutput {
     pub signals: SignalTable,
     /// Statistics of the selected signals over the steady-state window.
     pub summary: Vec<SignalSummary>,
+    /// Tracking metrics of the servo (every signal is used, selected or not).
+    pub tracking: Option<crate::tracking::TrackingMetrics>,
 }
 
 /// The scenario's starting state (`start`), with its `[initial]` entries applied.
@@ -156,6 +158,12 @@ pub fn run_scenario(loaded: &Loaded, progress: &mut dyn FnMut(f64)) -> Result<Ru
             source,
         })?;
     let all = trajectory.signals(model, &excitation);
+    let tracking = crate::tracking::tracking_metrics(
+        &scenario.reference,
+        &all,
+        scenario.window,
+        scenario.settle_window,
+    );
     let signals = match &scenario.signals {
         None => all,
         // Names were checked before the run; select cannot miss.
@@ -166,5 +174,6 @@ pub fn run_scenario(loaded: &Loaded, progress: &mut dyn FnMut(f64)) -> Result<Ru
         trajectory,
         signals,
         summary,
+        tracking,
     })
 }
