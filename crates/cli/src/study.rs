@@ -3,8 +3,8 @@
 //! bar and appended, as they finish, to a journal (`<table>.partial.csv`) in
 //! the staging folder `.<name>.journal` beside the output folder, so a killed
 //! study resumes where it stopped; an output folder holding items of the
-//! same study (another shard, say) is taken up too, while other work there is
-//! replaced only with `--force`. `--shard i/n` computes every n-th item
+//! same study (another shard, say) is taken up too (or recomputed whole with
+//! `--no-resume`), while other work there is replaced only with `--force`. `--shard i/n` computes every n-th item
 //! starting at i, and `--merge` joins shard folders of the same study,
 //! refusing duplicates, other splits and rows holding non-finite numbers.
 //! The finished table and everything drawn from it go into the staging
@@ -227,11 +227,8 @@ fn compute<S: Study>(
                 finished.extend(study.read_rows(&out_dir.join(S::TABLE)));
                 finished.extend(study.read_rows(&out_dir.join(journal_name::<S>())));
             }
-            (Ok(_), false, true) => bail!(
-                "{}: holds {} of this study; give --force with --no-resume to recompute them",
-                out_dir.display(),
-                S::ITEMS
-            ),
+            // The same study recomputed: its result is replaced whole.
+            (Ok(_), false, true) => {}
             (Err(refused), false, _) => return Err(refused),
         }
     }
