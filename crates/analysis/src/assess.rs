@@ -143,9 +143,9 @@ pub fn in_parallel<T: Send>(
     }
 }
 
-/// Output samples a point's simulation may hold, extensions included (as
-/// for a run: each is a full state vector).
-pub const MAX_POINT_SAMPLES: f64 = 2e7;
+/// Output samples a point's simulation may hold, extensions included: the
+/// limit of a run (each sample is a full state vector).
+pub const MAX_POINT_SAMPLES: f64 = fistage_model::scenario::MAX_SAMPLES;
 
 /// Whether a simulated duration per point fits in memory: a run is sampled
 /// at the scenario's rate (at least 4000 samples) and may be extended to

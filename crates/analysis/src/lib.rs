@@ -3,7 +3,9 @@
 //! (exact Jacobian in tangent coordinates), computes every eigenvalue with its
 //! frequency and damping ratio, the mode shapes in named coordinates, and how
 //! each mode's kinetic energy is shared between the table's six motions and
-//! the bearings; and sweeps of stability over one or two parameters. [`lab`]
+//! the bearings; sweeps of stability over one or two parameters; and
+//! tolerance analyses of populations of stages with servo-gain design
+//! ([`robust`], [`robust::tune`]), both judged point by point by [`assess`]. [`lab`]
 //! measures identification data (f_ss(v), the pre-motion FRF) on the simulated
 //! stage, as a lab would, for fistage-ident to fit.
 //!

@@ -24,8 +24,13 @@ fn root() -> PathBuf {
 /// A study of `robot` with the rigid stage's servo at k = 1e5 over a
 /// platform at 20 mm/s, and this `[robust]` table.
 fn study(robot: &str, robust: &str) -> (Loaded, RobotSpec, Scenario) {
+    study_with_servo(robot, "k = 1e5\nc = 250", robust)
+}
+
+/// The same with other servo gains (`gains`: the `[controller]` lines).
+fn study_with_servo(robot: &str, gains: &str, robust: &str) -> (Loaded, RobotSpec, Scenario) {
     let text = format!(
-        "robot = {:?}\nduration = 1.0\n[platform]\nvelocity = 0.02\n[controller]\nsensor = \"encoder\"\nactuator = \"drive\"\nk = 1e5\nc = 250\n{robust}",
+        "robot = {:?}\nduration = 1.0\n[platform]\nvelocity = 0.02\n[controller]\nsensor = \"encoder\"\nactuator = \"drive\"\n{gains}\n{robust}",
         root().join(robot).display().to_string()
     );
     let scenario = Scenario::from_str(&text, Path::new("robust.toml")).expect("scenario");
@@ -357,21 +362,11 @@ mod integral {
     fn the_integral_gain_is_raised_to_its_limit() {
         let table = "[robust]\nsamples = 16\nseed = 2\n\
                      [[robust.parameter]]\nparameter = \"overrides.bearing_friction.f_s\"\ndistribution = \"normal\"\nsd = 0.05\n";
-        let text = format!(
-            "robot = {:?}\nduration = 1.0\n[platform]\nvelocity = 0.02\n[controller]\nsensor = \"encoder\"\nactuator = \"drive\"\nk = 6e4\nc = 100\nk_i = 100\n{table}",
-            root()
-                .join("robots/stage_1dof_fi.urdf")
-                .display()
-                .to_string()
+        let (loaded, robot_file, scenario) = study_with_servo(
+            "robots/stage_1dof_fi.urdf",
+            "k = 6e4\nc = 100\nk_i = 100",
+            table,
         );
-        let scenario = Scenario::from_str(&text, Path::new("robust.toml")).expect("scenario");
-        let robot_file = RobotSpec::from_file(&scenario.robot).expect("robot");
-        let (robot, model) = assemble(robot_file.clone(), &scenario).expect("model");
-        let loaded = Loaded {
-            scenario: scenario.clone(),
-            robot,
-            model,
-        };
         let spec = RobustSpec::from_scenario(&scenario, &robot_file, None, None).expect("spec");
         let population = Population::draw(&spec, &loaded, &robot_file, 16);
         let criterion = Criterion::Margin(0.0);

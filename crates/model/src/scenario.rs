@@ -48,7 +48,7 @@ struct ScenarioFile {
     #[serde(default)]
     platform: PlatformFile,
     controller: Option<ControllerSettings>,
-    /// Read key by key (see [`Checker::reference_file`]), so that an error
+    /// Read key by key (see `Checker::reference`), so that an error
     /// names the key rather than the table.
     #[serde(default)]
     reference: toml::Table,
@@ -164,54 +164,6 @@ impl ControllerSettings {
             Gain::KI => &mut self.k_i,
         }
     }
-}
-
-#[derive(Debug, Clone)]
-enum ReferenceFile {
-    Constant {
-        value: f64,
-    },
-    Step {
-        time: f64,
-        initial: f64,
-        value: f64,
-    },
-    Ramp {
-        start: f64,
-        initial: f64,
-        velocity: f64,
-    },
-    Sine {
-        amplitude: f64,
-        /// Hz.
-        frequency: f64,
-        phase: f64,
-        offset: f64,
-    },
-    PointToPoint {
-        start: f64,
-        duration: f64,
-        initial: f64,
-        distance: f64,
-    },
-    Csv {
-        file: PathBuf,
-        time_column: String,
-        position_column: String,
-    },
-    Circle {
-        radius: f64,
-        tangential_velocity: f64,
-    },
-    Staircase {
-        start: f64,
-        initial: f64,
-        step: f64,
-        move_time: f64,
-        dwell: f64,
-        steps: f64,
-        profile: String,
-    },
 }
 
 /// Which engine integrates a scenario (`solver.engine`, or `engine` at the top).
@@ -509,7 +461,7 @@ impl Scenario {
                 })?;
             }
         }
-        let reference = checker.reference(checker.reference_file(raw.reference)?, base)?;
+        let reference = checker.reference(raw.reference, base)?;
         SolverSettings::check_rtol(raw.solver.rtol)
             .map_err(|message| checker.error("solver.rtol", message))?;
         checker.positive("solver.atol_scale", raw.solver.atol_scale)?;
@@ -620,7 +572,7 @@ impl Scenario {
 }
 
 /// The most output samples a run may hold (each is a full state vector).
-const MAX_SAMPLES: f64 = 2e7;
+pub const MAX_SAMPLES: f64 = 2e7;
 
 /// 1 kHz for short runs, fewer samples for long ones (at most about 200 000).
 fn default_sample_rate(duration: f64) -> f64 {
@@ -699,9 +651,10 @@ impl Checker<'_> {
         self.rule(key, value, Rule::NonNegative)
     }
 
-    /// The `[reference]` table, key by key: `kind` (default `constant`) then
-    /// the numbers (or, for `csv`, the strings) that kind takes.
-    fn reference_file(&self, table: toml::Table) -> Result<ReferenceFile, LoadError> {
+    /// The `[reference]` table, key by key: `kind` (default `constant`), then
+    /// the numbers (each checked by its rule) or, for `csv`, the strings
+    /// that kind takes; every error names its key.
+    fn reference(&self, table: toml::Table, base: &Path) -> Result<Reference, LoadError> {
         let kind = match table.get("kind") {
             None => "constant",
             Some(toml::Value::String(kind)) => kind.as_str(),
@@ -750,20 +703,23 @@ impl Checker<'_> {
                 ),
             ));
         }
-        let number = |key: &str, default: Option<f64>| -> Result<f64, LoadError> {
-            match (table.get(key), default) {
-                (Some(toml::Value::Float(v)), _) => Ok(*v),
-                (Some(toml::Value::Integer(v)), _) => Ok(*v as f64),
-                (Some(other), _) => Err(self.error(
-                    &format!("reference.{key}"),
-                    format!("must be a number, got {}", other.type_str()),
-                )),
-                (None, Some(default)) => Ok(default),
-                (None, None) => Err(self.error(
-                    &format!("reference.{key}"),
-                    format!("missing: kind = \"{kind}\" needs it"),
-                )),
-            }
+        let number = |key: &str, default: Option<f64>, rule: Rule| -> Result<f64, LoadError> {
+            let path = format!("reference.{key}");
+            let value = match (table.get(key), default) {
+                (Some(toml::Value::Float(v)), _) => *v,
+                (Some(toml::Value::Integer(v)), _) => *v as f64,
+                (Some(other), _) => {
+                    return Err(
+                        self.error(&path, format!("must be a number, got {}", other.type_str()))
+                    );
+                }
+                (None, Some(default)) => default,
+                (None, None) => {
+                    return Err(self.error(&path, format!("missing: kind = \"{kind}\" needs it")));
+                }
+            };
+            self.rule(&path, value, rule)?;
+            Ok(value)
         };
         let text = |key: &str, default: Option<&str>| -> Result<String, LoadError> {
             match (table.get(key), default) {
@@ -779,158 +735,40 @@ impl Checker<'_> {
                 )),
             }
         };
+        use Rule::{Finite, NonNegative, Positive};
         Ok(match kind {
-            "constant" => ReferenceFile::Constant {
-                value: number("value", Some(0.0))?,
+            "constant" => Reference::Constant {
+                value: number("value", Some(0.0), Finite)?,
             },
-            "step" => ReferenceFile::Step {
-                time: number("time", None)?,
-                initial: number("initial", Some(0.0))?,
-                value: number("value", None)?,
+            "step" => Reference::Step {
+                time: number("time", None, NonNegative)?,
+                initial: number("initial", Some(0.0), Finite)?,
+                value: number("value", None, Finite)?,
             },
-            "ramp" => ReferenceFile::Ramp {
-                start: number("start", Some(0.0))?,
-                initial: number("initial", Some(0.0))?,
-                velocity: number("velocity", None)?,
+            "ramp" => Reference::Ramp {
+                start: number("start", Some(0.0), NonNegative)?,
+                initial: number("initial", Some(0.0), Finite)?,
+                velocity: number("velocity", None, Finite)?,
             },
-            "sine" => ReferenceFile::Sine {
-                amplitude: number("amplitude", None)?,
-                frequency: number("frequency", None)?,
-                phase: number("phase", Some(0.0))?,
-                offset: number("offset", Some(0.0))?,
+            "sine" => Reference::Sine {
+                amplitude: number("amplitude", None, Finite)?,
+                frequency_hz: number("frequency", None, Positive)?,
+                phase: number("phase", Some(0.0), Finite)?,
+                offset: number("offset", Some(0.0), Finite)?,
             },
-            "circle" => ReferenceFile::Circle {
-                radius: number("radius", None)?,
-                tangential_velocity: number("tangential_velocity", None)?,
+            "circle" => Reference::Circle {
+                radius: number("radius", None, Positive)?,
+                tangential_velocity: number("tangential_velocity", None, Finite)?,
             },
-            "staircase" => ReferenceFile::Staircase {
-                start: number("start", Some(0.0))?,
-                initial: number("initial", Some(0.0))?,
-                step: number("step", None)?,
-                move_time: number("move_time", None)?,
-                dwell: number("dwell", None)?,
-                steps: number("steps", Some(1.0))?,
-                profile: text("profile", Some("minimum_jerk"))?,
-            },
-            "csv" => ReferenceFile::Csv {
-                file: PathBuf::from(text("file", None)?),
-                time_column: text("time_column", Some("time"))?,
-                position_column: text("position_column", Some("position"))?,
-            },
-            _ => ReferenceFile::PointToPoint {
-                start: number("start", None)?,
-                duration: number("duration", None)?,
-                initial: number("initial", Some(0.0))?,
-                distance: number("distance", None)?,
-            },
-        })
-    }
-
-    fn reference(&self, raw: ReferenceFile, base: &Path) -> Result<Reference, LoadError> {
-        Ok(match raw {
-            ReferenceFile::Constant { value } => {
-                self.finite("reference.value", value)?;
-                Reference::Constant { value }
-            }
-            ReferenceFile::Step {
-                time,
-                initial,
-                value,
-            } => {
-                self.non_negative("reference.time", time)?;
-                self.finite("reference.initial", initial)?;
-                self.finite("reference.value", value)?;
-                Reference::Step {
-                    time,
-                    initial,
-                    value,
-                }
-            }
-            ReferenceFile::Ramp {
-                start,
-                initial,
-                velocity,
-            } => {
-                self.non_negative("reference.start", start)?;
-                self.finite("reference.initial", initial)?;
-                self.finite("reference.velocity", velocity)?;
-                Reference::Ramp {
-                    start,
-                    initial,
-                    velocity,
-                }
-            }
-            ReferenceFile::Sine {
-                amplitude,
-                frequency,
-                phase,
-                offset,
-            } => {
-                self.finite("reference.amplitude", amplitude)?;
-                self.positive("reference.frequency", frequency)?;
-                self.finite("reference.phase", phase)?;
-                self.finite("reference.offset", offset)?;
-                Reference::Sine {
-                    amplitude,
-                    frequency_hz: frequency,
-                    phase,
-                    offset,
-                }
-            }
-            ReferenceFile::PointToPoint {
-                start,
-                duration,
-                initial,
-                distance,
-            } => {
-                self.non_negative("reference.start", start)?;
-                self.positive("reference.duration", duration)?;
-                self.finite("reference.initial", initial)?;
-                self.finite("reference.distance", distance)?;
-                Reference::PointToPoint {
-                    start,
-                    duration,
-                    initial,
-                    distance,
-                }
-            }
-            ReferenceFile::Csv {
-                file,
-                time_column,
-                position_column,
-            } => Reference::from_csv(&base.join(file), &time_column, &position_column)?,
-            ReferenceFile::Circle {
-                radius,
-                tangential_velocity,
-            } => {
-                self.positive("reference.radius", radius)?;
-                self.finite("reference.tangential_velocity", tangential_velocity)?;
-                Reference::Circle {
-                    radius,
-                    tangential_velocity,
-                }
-            }
-            ReferenceFile::Staircase {
-                start,
-                initial,
-                step,
-                move_time,
-                dwell,
-                steps,
-                profile,
-            } => {
-                self.non_negative("reference.start", start)?;
-                self.finite("reference.initial", initial)?;
-                self.finite("reference.step", step)?;
-                self.positive("reference.move_time", move_time)?;
-                self.non_negative("reference.dwell", dwell)?;
-                if !(steps.fract() == 0.0 && (1.0..=1e6).contains(&steps)) {
+            "staircase" => {
+                let steps = number("steps", Some(1.0), Positive)?;
+                if !(steps.fract() == 0.0 && steps <= 1e6) {
                     return Err(self.error(
                         "reference.steps",
                         format!("must be a whole number from 1 to 1000000, got {steps}"),
                     ));
                 }
-                let profile = match profile.as_str() {
+                let profile = match text("profile", Some("minimum_jerk"))?.as_str() {
                     "minimum_jerk" | "min_jerk" => MoveProfile::MinimumJerk,
                     "trapezoidal" => MoveProfile::Trapezoidal,
                     other => {
@@ -941,15 +779,26 @@ impl Checker<'_> {
                     }
                 };
                 Reference::Staircase {
-                    start,
-                    initial,
-                    step,
-                    move_time,
-                    dwell,
+                    start: number("start", Some(0.0), NonNegative)?,
+                    initial: number("initial", Some(0.0), Finite)?,
+                    step: number("step", None, Finite)?,
+                    move_time: number("move_time", None, Positive)?,
+                    dwell: number("dwell", None, NonNegative)?,
                     steps: steps as usize,
                     profile,
                 }
             }
+            "csv" => Reference::from_csv(
+                &base.join(text("file", None)?),
+                &text("time_column", Some("time"))?,
+                &text("position_column", Some("position"))?,
+            )?,
+            _ => Reference::PointToPoint {
+                start: number("start", None, NonNegative)?,
+                duration: number("duration", None, Positive)?,
+                initial: number("initial", Some(0.0), Finite)?,
+                distance: number("distance", None, Finite)?,
+            },
         })
     }
 
