@@ -507,7 +507,9 @@ pub struct Summary {
     pub sampling: Sampling,
     /// Seed.
     pub seed: u64,
-    /// P(largest real part > 0) over the samples with a linear verdict.
+    /// P(largest real part > 0): the estimate over the samples with a linear
+    /// verdict; the interval also spans every outcome the undetermined ones
+    /// could have had.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub p_unstable_linear: Option<Probability>,
     /// Samples whose linear verdict the numerics could not back.
@@ -585,17 +587,21 @@ impl Summary {
             computed: results.len(),
             sampling: spec.sampling,
             seed: spec.seed,
-            p_unstable_linear: analysis
-                .linear()
-                .then(|| Probability::of(count_false(&linear), linear.len())),
+            p_unstable_linear: analysis.linear().then(|| {
+                Probability::with_unknown(count_false(&linear), linear.len(), built - linear.len())
+            }),
             undetermined_linear: if analysis.linear() {
                 built - linear.len()
             } else {
                 0
             },
-            p_oscillating: analysis
-                .simulation()
-                .then(|| Probability::of(count_false(&simulated), simulated.len())),
+            p_oscillating: analysis.simulation().then(|| {
+                Probability::with_unknown(
+                    count_false(&simulated),
+                    simulated.len(),
+                    built - simulated.len(),
+                )
+            }),
             refused: results.len() - built,
             max_real_eig_quantiles: Quantiles::of(eig.iter().map(|&(_, v)| v).collect()),
             amplitude_quantiles: Quantiles::of(amp.iter().map(|&(_, v)| v).collect()),

@@ -43,6 +43,26 @@ impl Probability {
     }
 }
 
+impl Probability {
+    /// `k` of `n` determined trials, with `unknown` more trials whose outcome
+    /// could not be determined: the estimate is over the determined ones, and
+    /// the interval spans every way the unknown ones could have gone (from
+    /// the Wilson lower end with none of them counted to the upper end with
+    /// all of them), so it never claims more than the data back. With no
+    /// unknown trials it is [`Probability::of`].
+    pub fn with_unknown(k: usize, n: usize, unknown: usize) -> Self {
+        if unknown == 0 {
+            return Self::of(k, n);
+        }
+        let all = n + unknown;
+        Self {
+            estimate: if n == 0 { 0.0 } else { k as f64 / n as f64 },
+            ci95: [Self::of(k, all).ci95[0], Self::of(k + unknown, all).ci95[1]],
+            n,
+        }
+    }
+}
+
 /// The empirical quantile q in [0, 1] of sorted values (linear
 /// interpolation between order statistics); `None` for no values.
 pub fn quantile(sorted: &[f64], q: f64) -> Option<f64> {
@@ -124,6 +144,19 @@ mod tests {
             .count();
         let coverage = covered as f64 / experiments as f64;
         assert!((0.93..0.97).contains(&coverage), "coverage {coverage}");
+    }
+
+    /// Undetermined trials widen the interval to every outcome they could
+    /// have had, and change nothing when there are none.
+    #[test]
+    fn unknown_trials_widen_the_interval() {
+        assert_eq!(Probability::with_unknown(5, 10, 0), Probability::of(5, 10));
+        let p = Probability::with_unknown(5, 10, 5);
+        assert_eq!(p.estimate, 0.5);
+        assert_eq!(p.ci95[0], Probability::of(5, 15).ci95[0]);
+        assert_eq!(p.ci95[1], Probability::of(10, 15).ci95[1]);
+        assert!(p.ci95[0] < Probability::of(5, 10).ci95[0]);
+        assert!(p.ci95[1] > Probability::of(5, 10).ci95[1]);
     }
 
     #[test]
