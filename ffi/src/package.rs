@@ -107,11 +107,18 @@ struct Scratch(PathBuf);
 
 impl Scratch {
     fn new() -> Result<Self, PackageError> {
+        // Unique within the process too: two packagings at the same instant
+        // (parallel tests) must not share, and remove, one folder.
+        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let serial = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let nanos = std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
             .map(|d| d.as_nanos())
             .unwrap_or_default();
-        let dir = std::env::temp_dir().join(format!("fistage-fmu-{}-{nanos}", std::process::id()));
+        let dir = std::env::temp_dir().join(format!(
+            "fistage-fmu-{}-{nanos}-{serial}",
+            std::process::id()
+        ));
         std::fs::create_dir_all(&dir).map_err(|reason| PackageError::Io {
             file: dir.clone(),
             reason,
@@ -198,7 +205,17 @@ fn library_without_debug_info(library: &Path, scratch: &Path) -> Result<Vec<u8>,
         .status();
     match status {
         Ok(status) if status.success() => read(&stripped),
-        _ => Ok(bytes),
+        // No `strip` on this system: the library goes in as it is.
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(bytes),
+        // A `strip` that fails must not silently ship the debug information.
+        Ok(status) => Err(PackageError::Library {
+            file: library.to_path_buf(),
+            reason: format!("strip --strip-debug failed ({status})"),
+        }),
+        Err(e) => Err(PackageError::Library {
+            file: library.to_path_buf(),
+            reason: format!("strip --strip-debug could not run: {e}"),
+        }),
     }
 }
 
