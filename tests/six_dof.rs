@@ -276,6 +276,8 @@ fn jacobian_matches_central_differences() {
                     AngularVelocity => rng.range(-0.1, 0.1),
                     Bristle => rng.range(-2e-6, 2e-6),
                     ErrorIntegral => rng.range(-1e-5, 1e-5),
+                    CompensatorBristle => rng.range(-2e-6, 2e-6),
+                    CompensatorForce | ObserverState => rng.range(-5.0, 5.0),
                 };
             }
             if let Some(q0) = model.layout().index("table.qw") {

@@ -28,6 +28,7 @@ fn refused(rule: Rule) -> f64 {
     match rule {
         Rule::Finite => f64::INFINITY,
         Rule::Spread => 1.5,
+        Rule::RelativeChange => -1.5,
         Rule::NonNegative | Rule::Positive => -1.0,
     }
 }

@@ -21,6 +21,20 @@ pub fn load(relative: &str) -> Loaded {
     fistage_model::load(&path(relative)).unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// A scenario written as text (`robot` relative to the repository root)
+/// with its robot, loaded; panics with the loader's message on failure.
+pub fn load_text(text: &str) -> Loaded {
+    let scenario =
+        Scenario::from_str(text, &path("scenario.toml")).unwrap_or_else(|e| panic!("{e}"));
+    let robot = RobotSpec::from_file(&scenario.robot).unwrap_or_else(|e| panic!("{e}"));
+    let (robot, model) = assemble(robot, &scenario).unwrap_or_else(|e| panic!("{e}"));
+    Loaded {
+        scenario,
+        robot,
+        model,
+    }
+}
+
 /// Runs a loaded scenario; panics with the engine's message on failure.
 pub fn run(loaded: &Loaded) -> RunOutput {
     fistage_sim::run_scenario(loaded, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"))

@@ -8,6 +8,7 @@ use std::path::Path;
 
 use nalgebra::{Isometry3, Matrix3, Vector3};
 
+use crate::compensation::CompensationSettings;
 use crate::dynamics;
 use crate::elements::{
     Body, Controller, Frame, FrictionContact, Isolator, Joint, JointMotion, MassBlock, PointAxis,
@@ -19,6 +20,7 @@ use crate::model::Model;
 use crate::parameter;
 use crate::robot::{JointKind, PointAxisSpec, RobotSpec};
 use crate::scenario::Scenario;
+use crate::servo::{Feedforward, Observer};
 
 /// Name of the root link.
 pub const WORLD: &str = "world";
@@ -402,6 +404,71 @@ impl<'a> Assembler<'a> {
         })
     }
 
+    /// The feedforward compensator of `[compensation]`: its model (felt
+    /// through the isolators that carry the modelled element, unless
+    /// `through_isolator = false`) and its state.
+    fn feedforward(
+        &mut self,
+        settings: &CompensationSettings,
+        robot: &RobotSpec,
+        scenario: &Scenario,
+        frictions: &[FrictionContact],
+        isolators: &[Isolator],
+    ) -> Result<Feedforward, LoadError> {
+        let mut model = settings.bearing_model(robot, &scenario.file)?;
+        let contact =
+            (settings.element.as_ref()).and_then(|name| frictions.iter().find(|f| &f.name == name));
+        let carried = contact.and_then(|contact| self.isolator_along(contact, isolators));
+        match (settings.through_isolator, carried) {
+            (Some(true), None) => {
+                return Err(scenario.error(
+                    "compensation.through_isolator",
+                    match &settings.element {
+                        Some(name) => format!(
+                            "no isolator with stiffness along its sliding axis carries \"{name}\" in {}",
+                            robot.file.display()
+                        ),
+                        None => "needs compensation.element: the friction element whose isolator it is".into(),
+                    },
+                ));
+            }
+            (Some(false), _) | (_, None) => {}
+            (_, Some((k_j, c_j))) => model = model.felt_through(k_j, c_j),
+        }
+        let (kind, suffix, nominal) = model.state();
+        let state_index = self.names.len();
+        self.push_state(format!("compensation.{suffix}"), kind, nominal);
+        Ok(Feedforward {
+            element: settings.element.clone(),
+            model,
+            state_index,
+        })
+    }
+
+    /// The stiffness and damping along a contact's sliding axis of the
+    /// isolators that join its body to another (summed: isolators on one
+    /// body act in parallel); `None` when none has stiffness along it.
+    fn isolator_along(
+        &self,
+        contact: &FrictionContact,
+        isolators: &[Isolator],
+    ) -> Option<(f64, f64)> {
+        let body = Frame::Body(contact.body);
+        let (mut k, mut c) = (0.0, 0.0);
+        for isolator in isolators
+            .iter()
+            .filter(|i| i.parent == body || i.child == body)
+        {
+            let attach = frame_pose_at_zero(&self.bodies, isolator.parent) * isolator.parent_attach;
+            let axis = attach.rotation.inverse() * contact.axis;
+            for j in 0..3 {
+                k += isolator.stiffness[j] * axis[j] * axis[j];
+                c += isolator.damping[j] * axis[j] * axis[j];
+            }
+        }
+        (k > 0.0).then_some((k, c))
+    }
+
     fn build(mut self) -> Result<Model, LoadError> {
         self.merge_inertia()?;
         self.number_joint_states();
@@ -530,6 +597,25 @@ impl<'a> Assembler<'a> {
                     self.push_state("controller.integral".into(), StateKind::ErrorIntegral, 1e-4);
                     index
                 });
+                let feedforward = match &scenario.compensation {
+                    Some(compensation) => Some(self.feedforward(
+                        compensation,
+                        robot,
+                        scenario,
+                        &frictions,
+                        &isolators,
+                    )?),
+                    None => None,
+                };
+                let observer = scenario.observer.map(|settings| {
+                    let state_index = self.names.len();
+                    self.push_state("dob.state".into(), StateKind::ObserverState, 1.0);
+                    Observer {
+                        nominal_mass: settings.nominal_mass,
+                        cutoff: 2.0 * std::f64::consts::PI * settings.bandwidth,
+                        state_index,
+                    }
+                });
                 Some(Controller {
                     sensor,
                     actuator,
@@ -537,6 +623,8 @@ impl<'a> Assembler<'a> {
                     c: settings.c,
                     k_i: settings.k_i,
                     integral_index,
+                    feedforward,
+                    observer,
                 })
             }
         };
@@ -596,9 +684,15 @@ fn signal_list(model: &Structure) -> Vec<SignalInfo> {
         push(format!("{}.position", sensor.name), "m");
         push(format!("{}.velocity", sensor.name), "m/s");
     }
-    if model.controller.is_some() {
+    if let Some(controller) = &model.controller {
         push("controller.reference".into(), "m");
         push("controller.error".into(), "m");
+        if controller.feedforward.is_some() {
+            push("compensation.force".into(), "N");
+        }
+        if controller.observer.is_some() {
+            push("dob.estimate".into(), "N");
+        }
     }
     for actuator in &model.actuators {
         push(format!("{}.force", actuator.name), "N");

@@ -99,7 +99,7 @@ impl Model {
     }
 
     /// Rates of the states that are not body motion (bristle deflections and
-    /// the controller integrator) after [`Model::element_wrenches`]: pairs
+    /// the servo's own states) after [`Model::element_wrenches`]: pairs
     /// of (state index, rate).
     pub fn internal_rates(&self, ws: &Workspace) -> Vec<(usize, f64)> {
         let mut rates: Vec<(usize, f64)> = self
@@ -109,13 +109,8 @@ impl Model {
             .zip(&ws.elements.z_rate)
             .map(|(friction, rate)| (friction.z_index, *rate))
             .collect();
-        if let Some(index) = self
-            .structure
-            .controller
-            .as_ref()
-            .and_then(|c| c.integral_index)
-        {
-            rates.push((index, ws.elements.tracking_error));
+        if let Some(controller) = &self.structure.controller {
+            rates.extend(controller.state_rates(&ws.elements.servo));
         }
         rates
     }

@@ -25,6 +25,7 @@ use crate::laws::{
 use crate::reference::ReferenceSample;
 use crate::rooted::RootedScratch;
 use crate::scalar::Scalar;
+use crate::servo::ServoValues;
 pub use crate::values::{ElementValues, InputValues};
 
 /// How [`crate::Model::rhs`] evaluates a model; every path gives the same state
@@ -130,7 +131,7 @@ impl Structure {
                 isolator_deflection: vec![[S::zero(); 6]; ni],
                 isolator_rate: vec![[S::zero(); 6]; ni],
                 reference: ReferenceSample::default(),
-                tracking_error: S::zero(),
+                servo: ServoValues::zero(),
             },
         }
     }
@@ -166,8 +167,8 @@ impl Structure {
         for (friction, rate) in self.frictions.iter().zip(&ws.elements.z_rate) {
             dx[friction.z_index] = *rate;
         }
-        if let Some(index) = self.controller.as_ref().and_then(|c| c.integral_index) {
-            dx[index] = ws.elements.tracking_error;
+        if let Some(controller) = &self.controller {
+            controller.write_rates(&ws.elements.servo, dx);
         }
     }
 
@@ -217,9 +218,15 @@ impl Structure {
             put(*p);
             put(*v);
         }
-        if self.controller.is_some() {
+        if let Some(controller) = &self.controller {
             put(inputs.reference_position);
-            put(e.tracking_error);
+            put(e.servo.error);
+            if controller.feedforward.is_some() {
+                put(e.servo.feedforward);
+            }
+            if controller.observer.is_some() {
+                put(e.servo.estimate);
+            }
         }
         for f in &e.actuator_force {
             put(*f);

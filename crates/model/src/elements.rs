@@ -8,6 +8,7 @@ use nalgebra::{Isometry3, Matrix3, Vector3};
 
 use crate::lugre::LugreParams;
 use crate::reference::ReferenceSample;
+use crate::servo::{Feedforward, Observer};
 
 /// What a force element or sensor is attached to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -197,6 +198,10 @@ pub struct Controller {
     /// Index of the integral of the tracking error in the state vector (present
     /// only when k_i > 0, so that a PD loop has no spurious zero eigenvalue).
     pub integral_index: Option<usize>,
+    /// Feedforward friction compensation, if any (`[compensation]`).
+    pub feedforward: Option<Feedforward>,
+    /// Disturbance observer, if any (`[dob]`).
+    pub observer: Option<Observer>,
 }
 
 /// What a state entry is.
@@ -216,6 +221,12 @@ pub enum StateKind {
     Bristle,
     /// Integral of the tracking error, m s.
     ErrorIntegral,
+    /// Bristle deflection of a feedforward compensator's LuGre model, m.
+    CompensatorBristle,
+    /// Friction force of a feedforward compensator's Dahl model, N.
+    CompensatorForce,
+    /// State of a disturbance observer (estimate less its velocity term), N.
+    ObserverState,
 }
 
 impl StateKind {
@@ -229,12 +240,16 @@ impl StateKind {
             Self::AngularVelocity => "rad/s",
             Self::Bristle => "m",
             Self::ErrorIntegral => "m s",
+            Self::CompensatorBristle => "m",
+            Self::CompensatorForce | Self::ObserverState => "N",
         }
     }
 }
 
 /// Names, kinds and blocks of the state vector
-/// `[positions (nq) | velocities (nv) | bristles (nz) | error integral (0 or 1)]`.
+/// `[positions (nq) | velocities (nv) | bristles (nz) | servo states]`, the
+/// servo's own states being the error integral, the feedforward compensator's
+/// state and the observer's, each present only when the servo has it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StateLayout {
     /// Entry names, e.g. `table_x.q`, `table.qw`, `bearing_friction.z`.

@@ -12,7 +12,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::elements::{Controller, RigidBody, Structure};
+use crate::elements::{RigidBody, Structure};
 use crate::scalar::Scalar;
 use crate::values::{ElementValues, InputValues};
 
@@ -146,26 +146,6 @@ pub(crate) fn relative_rotation<S: Scalar>(
     (rotation, rotate_back(a, omega_b - omega_a))
 }
 
-impl Controller {
-    /// The PID law: the force `-(k e + c e' + k_i integral)` and the tracking
-    /// error `e` = reading - reference, from the sensor reading and rate.
-    #[inline(always)]
-    pub(crate) fn law<S: Scalar>(
-        &self,
-        position: S,
-        velocity: S,
-        integral: S,
-        inputs: &InputValues<S>,
-    ) -> (S, S) {
-        let error = position - inputs.reference_position;
-        let error_rate = velocity - inputs.reference_velocity;
-        let force = -(S::constant(self.k) * error
-            + S::constant(self.c) * error_rate
-            + S::constant(self.k_i) * integral);
-        (force, error)
-    }
-}
-
 /// The servo: writes the actuator forces and the tracking error from the
 /// sensor readings already in `elements`. The external servo force input is
 /// added to the controller's actuator (to the first actuator when there is no
@@ -179,14 +159,13 @@ pub(crate) fn servo_forces<S: Scalar>(
 ) {
     elements.actuator_force.fill(S::zero());
     if let Some(controller) = &model.controller {
-        let integral = controller.integral_index.map_or(S::zero(), |i| x[i]);
-        let (force, error) = controller.law(
+        let (force, values) = controller.law(
             elements.sensor_position[controller.sensor],
             elements.sensor_velocity[controller.sensor],
-            integral,
+            x,
             inputs,
         );
-        elements.tracking_error = error;
+        elements.servo = values;
         elements.actuator_force[controller.actuator] = force;
     }
     if let Some(a) = model.servo_actuator() {

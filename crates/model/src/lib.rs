@@ -55,6 +55,8 @@
 
 pub mod assembly;
 pub mod body_motion;
+pub mod compensation;
+pub mod dahl;
 pub mod dynamics;
 pub mod elements;
 pub mod equilibrium;
@@ -72,6 +74,7 @@ mod rooted;
 pub mod rule;
 pub mod scalar;
 pub mod scenario;
+pub mod servo;
 mod translational;
 mod urdf_check;
 mod values;

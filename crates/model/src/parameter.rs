@@ -20,6 +20,10 @@
 //! | `overrides.<isolator>.x` (`y`, `z`) | m | finite | attach point |
 //! | `overrides.<actuator or sensor>.x` (`y`, `z`) | m | finite | point |
 //! | `overrides.<link>.mass` | kg | > 0 | link mass (inertia scales with it) |
+//! | `compensation.<model key>` | SI | the model's | a feedforward compensator's model parameter (`sigma0` .. `v_s`; Dahl: `sigma`, `f_c`, `exponent`) |
+//! | `compensation.error.<model key>` | 1 | > -1 | relative error on that parameter |
+//! | `dob.bandwidth`, `dob.nominal_mass` | Hz, kg | > 0 | disturbance observer |
+//! | `reference.<number key>` | SI | the key's | a number of `[reference]` (e.g. `tangential_velocity`, `step`) |
 //!
 //! `alpha`, `beta` and `spread.*` act on the robot file's values and read as
 //! their neutral value (1, 1 and 0). `spread.<key>` gives contact i of n (file
@@ -42,9 +46,11 @@
 
 use std::fmt;
 
+use crate::compensation::{CompensationKind, ERROR_RULE, ModelKey, ObserverKey};
 use crate::error::LoadError;
 use crate::lugre::{InvalidLugreParameter, LugreKey, LugreParams};
 use crate::model::Model;
+use crate::reference::Reference;
 use crate::robot::{IsolatorKey, IsolatorSpec, RobotSpec};
 use crate::rule::Rule;
 use crate::scenario::{Gain, Scenario};
@@ -74,6 +80,13 @@ enum Target {
     Isolator(usize, &'static IsolatorKey),
     Point(Element, usize),
     LinkMass(usize),
+    /// A parameter of the feedforward compensator's model.
+    Compensation(ModelKey),
+    /// The relative error on one.
+    CompensationError(ModelKey),
+    Observer(ObserverKey),
+    /// A number key of `[reference]`.
+    Reference(&'static str),
 }
 
 const SPREAD_FRICTION: [&str; 3] = ["f_c", "f_s", "sigma0"];
@@ -121,7 +134,27 @@ impl Parameter {
                 push(format!("controller.{}", gain.key()), Target::Gain(gain));
             }
         }
+        if let Some(compensation) = &scenario.compensation {
+            for key in compensation.kind.keys() {
+                push(
+                    format!("compensation.{}", key.name),
+                    Target::Compensation(key),
+                );
+            }
+            for key in compensation.kind.keys() {
+                let path = format!("compensation.error.{}", key.name);
+                push(path, Target::CompensationError(key));
+            }
+        }
+        if scenario.observer.is_some() {
+            for key in ObserverKey::ALL {
+                push(format!("dob.{}", key.name()), Target::Observer(key));
+            }
+        }
         push("platform.velocity".into(), Target::PlatformVelocity);
+        for key in scenario.reference.number_keys() {
+            push(format!("reference.{key}"), Target::Reference(key));
+        }
         for (i, friction) in robot.frictions.iter().enumerate() {
             for key in &LugreParams::KEYS {
                 let path = format!("overrides.{}.{}", friction.name, key.name);
@@ -196,6 +229,10 @@ impl Parameter {
             Target::Isolator(_, key) => key.unit,
             Target::Point(..) => "m",
             Target::LinkMass(_) => "kg",
+            Target::Compensation(key) => key.unit,
+            Target::CompensationError(_) => "1",
+            Target::Observer(key) => key.unit(),
+            Target::Reference(key) => reference_unit(key),
         }
     }
 
@@ -208,6 +245,10 @@ impl Parameter {
             Target::Spread(_) => Rule::Spread,
             Target::Lugre(_, key) => key.rule,
             Target::Isolator(..) => IsolatorSpec::RULE,
+            Target::Compensation(key) => key.rule,
+            Target::CompensationError(_) => ERROR_RULE,
+            Target::Observer(_) => ObserverKey::RULE,
+            Target::Reference(key) => Reference::key_rule(key),
         }
     }
 
@@ -253,6 +294,20 @@ impl Parameter {
                 element_name(robot, element)
             ),
             Target::LinkMass(i) => format!("mass of link {}", robot.links[i].name),
+            Target::Compensation(key) => {
+                format!(
+                    "feedforward compensator's {} ({})",
+                    key.name, key.description
+                )
+            }
+            Target::CompensationError(key) => {
+                format!(
+                    "relative error on the feedforward compensator's {}",
+                    key.name
+                )
+            }
+            Target::Observer(key) => key.description().into(),
+            Target::Reference(key) => format!("reference {key}"),
         }
     }
 
@@ -261,6 +316,14 @@ impl Parameter {
         match self.target {
             Target::Gain(gain) => scenario.controller.as_ref().map_or(0.0, |c| c.gain(gain)),
             Target::PlatformVelocity => scenario.platform_velocity,
+            Target::Compensation(key) => (scenario.compensation.as_ref())
+                .and_then(|c| c.stated_model(robot, &scenario.file).ok())
+                .map_or(f64::NAN, |model| model.get(key.name)),
+            Target::CompensationError(key) => (scenario.compensation.as_ref())
+                .and_then(|c| c.error.get(key.name).copied())
+                .unwrap_or(0.0),
+            Target::Observer(key) => scenario.observer.map_or(f64::NAN, |o| o.get(key)),
+            Target::Reference(key) => scenario.reference.number(key).unwrap_or(f64::NAN),
             _ => self.read_robot(robot),
         }
     }
@@ -268,7 +331,12 @@ impl Parameter {
     /// A value held by the robot description (the neutral value for relative ones).
     fn read_robot(&self, robot: &RobotSpec) -> f64 {
         match self.target {
-            Target::Gain(_) | Target::PlatformVelocity => f64::NAN,
+            Target::Gain(_)
+            | Target::PlatformVelocity
+            | Target::Compensation(_)
+            | Target::CompensationError(_)
+            | Target::Observer(_)
+            | Target::Reference(_) => f64::NAN,
             Target::Alpha | Target::Beta => 1.0,
             Target::Spread(_) => 0.0,
             Target::Lugre(i, key) => key.get(&robot.frictions[i].lugre),
@@ -293,7 +361,14 @@ impl Parameter {
                 Gain::C => c.c,
                 Gain::KI => c.k_i,
             }),
-            Target::PlatformVelocity | Target::Alpha | Target::Beta | Target::Spread(_) => None,
+            Target::PlatformVelocity
+            | Target::Alpha
+            | Target::Beta
+            | Target::Spread(_)
+            | Target::Compensation(_)
+            | Target::CompensationError(_)
+            | Target::Observer(_)
+            | Target::Reference(_) => None,
             _ => Some(self.read_robot(model.robot())),
         }
     }
@@ -316,6 +391,31 @@ impl Parameter {
                 }
             }
             Target::PlatformVelocity => scenario.platform_velocity = value,
+            Target::Compensation(key) => {
+                if let Some(c) = scenario.compensation.as_mut() {
+                    c.values.insert(key.name, value);
+                }
+            }
+            Target::CompensationError(key) => {
+                if let Some(c) = scenario.compensation.as_mut() {
+                    c.error.insert(key.name, value);
+                }
+            }
+            Target::Observer(key) => {
+                if let Some(o) = scenario.observer.as_mut() {
+                    *o.get_mut(key) = value;
+                }
+            }
+            Target::Reference(key) => {
+                let slot = scenario
+                    .reference
+                    .numbers_mut()
+                    .into_iter()
+                    .find(|(k, _)| *k == key);
+                if let Some((_, slot)) = slot {
+                    *slot = value;
+                }
+            }
             _ => self.write_robot(robot, value),
         }
         Ok(())
@@ -325,7 +425,12 @@ impl Parameter {
     /// and platform velocity) without checking its rule.
     fn write_robot(&self, robot: &mut RobotSpec, value: f64) {
         match self.target {
-            Target::Gain(_) | Target::PlatformVelocity => {}
+            Target::Gain(_)
+            | Target::PlatformVelocity
+            | Target::Compensation(_)
+            | Target::CompensationError(_)
+            | Target::Observer(_)
+            | Target::Reference(_) => {}
             Target::Alpha => {
                 for isolator in &mut robot.isolators {
                     isolator.stiffness[0] *= value;
@@ -412,6 +517,32 @@ fn resolve_target(path: &str, scenario: &Scenario, robot: &RobotSpec) -> Result<
         }
         return Ok(Target::Gain(gain));
     }
+    if let Some(rest) = path.strip_prefix("compensation.") {
+        return compensation_target(rest, scenario).map_err(error);
+    }
+    if let Some(key) = path.strip_prefix("dob.") {
+        let key = ObserverKey::ALL
+            .into_iter()
+            .find(|k| k.name() == key)
+            .ok_or_else(|| {
+                error("unknown observer parameter (use bandwidth or nominal_mass)".into())
+            })?;
+        if scenario.observer.is_none() {
+            return Err(error("the scenario has no [dob]".into()));
+        }
+        return Ok(Target::Observer(key));
+    }
+    if let Some(key) = path.strip_prefix("reference.") {
+        let keys = scenario.reference.number_keys();
+        return match keys.iter().find(|k| **k == key) {
+            Some(key) => Ok(Target::Reference(key)),
+            None if keys.is_empty() => Err(error("this reference has no numbers to set".into())),
+            None => Err(error(format!(
+                "this reference has no number \"{key}\" (it has {})",
+                keys.join(", ")
+            ))),
+        };
+    }
     if let Some(key) = path.strip_prefix("spread.") {
         let keys: &'static [&'static str] = if key == "friction" {
             &SPREAD_FRICTION
@@ -461,6 +592,42 @@ fn resolve_target(path: &str, scenario: &Scenario, robot: &RobotSpec) -> Result<
         )));
     };
     element_target(name, key, robot).map_err(|(at, message)| scenario.error(at, message))
+}
+
+/// The target of `compensation.<key>` or `compensation.error.<key>`.
+fn compensation_target(rest: &str, scenario: &Scenario) -> Result<Target, String> {
+    let Some(compensation) = &scenario.compensation else {
+        return Err("the scenario has no [compensation] (or its kind is none)".into());
+    };
+    let kind: CompensationKind = compensation.kind;
+    let (name, relative) = match rest.strip_prefix("error.") {
+        Some(name) => (name, true),
+        None => (rest, false),
+    };
+    let key = kind.key(name).ok_or_else(|| {
+        let names: Vec<&str> = kind.keys().iter().map(|k| k.name).collect();
+        format!(
+            "a {} model has no parameter \"{name}\" (it has {})",
+            kind.name(),
+            names.join(", ")
+        )
+    })?;
+    Ok(if relative {
+        Target::CompensationError(key)
+    } else {
+        Target::Compensation(key)
+    })
+}
+
+/// The unit of a number key of `[reference]`.
+fn reference_unit(key: &str) -> &'static str {
+    match key {
+        "time" | "start" | "duration" | "move_time" | "dwell" => "s",
+        "frequency" => "Hz",
+        "phase" => "rad",
+        "velocity" | "tangential_velocity" => "m/s",
+        _ => "m",
+    }
 }
 
 /// Applies one `[overrides.<name>] key = value` of `scenario` to `robot`.

@@ -2,6 +2,7 @@
 //! point-to-point and a CSV time series. Each gives position and velocity at any
 //! time, and the times where it is not smooth so that an engine can restart there.
 
+use crate::rule::Rule;
 use std::path::Path;
 
 use crate::error::LoadError;
@@ -150,6 +151,103 @@ impl MoveProfile {
 impl Default for Reference {
     fn default() -> Self {
         Self::Constant { value: 0.0 }
+    }
+}
+
+impl Reference {
+    /// The rule of a number key of `[reference]` (the same for every kind
+    /// that takes it).
+    pub fn key_rule(key: &str) -> Rule {
+        match key {
+            "time" | "start" | "dwell" => Rule::NonNegative,
+            "frequency" | "duration" | "radius" | "move_time" | "steps" => Rule::Positive,
+            _ => Rule::Finite,
+        }
+    }
+
+    /// The number keys of this reference with their values, to read and
+    /// write through the parameter table (a staircase's `steps` and the
+    /// samples of a `csv` reference are not numbers to tune).
+    pub fn numbers_mut(&mut self) -> Vec<(&'static str, &mut f64)> {
+        match self {
+            Self::Constant { value } => vec![("value", value)],
+            Self::Step {
+                time,
+                initial,
+                value,
+            } => vec![("time", time), ("initial", initial), ("value", value)],
+            Self::Ramp {
+                start,
+                initial,
+                velocity,
+            } => vec![
+                ("start", start),
+                ("initial", initial),
+                ("velocity", velocity),
+            ],
+            Self::Sine {
+                amplitude,
+                frequency_hz,
+                phase,
+                offset,
+            } => vec![
+                ("amplitude", amplitude),
+                ("frequency", frequency_hz),
+                ("phase", phase),
+                ("offset", offset),
+            ],
+            Self::PointToPoint {
+                start,
+                duration,
+                initial,
+                distance,
+            } => vec![
+                ("start", start),
+                ("duration", duration),
+                ("initial", initial),
+                ("distance", distance),
+            ],
+            Self::Circle {
+                radius,
+                tangential_velocity,
+            } => vec![
+                ("radius", radius),
+                ("tangential_velocity", tangential_velocity),
+            ],
+            Self::Staircase {
+                start,
+                initial,
+                step,
+                move_time,
+                dwell,
+                ..
+            } => vec![
+                ("start", start),
+                ("initial", initial),
+                ("step", step),
+                ("move_time", move_time),
+                ("dwell", dwell),
+            ],
+            Self::Samples { .. } => Vec::new(),
+        }
+    }
+
+    /// The value of a number key (see [`Self::numbers_mut`]).
+    pub fn number(&self, key: &str) -> Option<f64> {
+        self.clone()
+            .numbers_mut()
+            .into_iter()
+            .find(|(k, _)| *k == key)
+            .map(|(_, v)| *v)
+    }
+
+    /// The number keys of this reference.
+    pub fn number_keys(&self) -> Vec<&'static str> {
+        self.clone()
+            .numbers_mut()
+            .into_iter()
+            .map(|(k, _)| k)
+            .collect()
     }
 }
 

@@ -397,8 +397,8 @@ impl RootedPlan {
         self.servo(model, x, inputs, scratch, elements);
         self.friction_forces(model, x, inputs, dx, scratch);
         self.accelerations(dx, scratch);
-        if let Some(index) = model.controller.as_ref().and_then(|c| c.integral_index) {
-            dx[index] = elements.tracking_error;
+        if let Some(controller) = &model.controller {
+            controller.write_rates(&elements.servo, dx);
         }
     }
 

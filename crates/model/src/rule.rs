@@ -24,6 +24,8 @@ pub enum Rule {
     Positive,
     /// A relative spread `s` applied as factors `1 + s w` with `|w| <= 1`: `-1 < s < 1`.
     Spread,
+    /// A relative change `e` applied as the factor `1 + e`: `e > -1`.
+    RelativeChange,
 }
 
 /// A value that breaks its rule.
@@ -67,6 +69,7 @@ impl Rule {
             Rule::NonNegative => ">= 0",
             Rule::Positive => "> 0",
             Rule::Spread => "between -1 and 1 (exclusive)",
+            Rule::RelativeChange => "> -1 (a relative change; the factor 1 + e stays positive)",
         }
     }
 
@@ -93,6 +96,7 @@ impl Rule {
                 Rule::NonNegative => value >= 0.0,
                 Rule::Positive => value >= MIN_POSITIVE,
                 Rule::Spread => value.abs() < 1.0,
+                Rule::RelativeChange => value > -1.0,
             }
     }
 

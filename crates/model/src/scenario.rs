@@ -31,6 +31,9 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
+use crate::compensation::{
+    CompensationSettings, ObserverSettings, read_compensation, read_observer,
+};
 use crate::error::LoadError;
 use crate::reference::{MoveProfile, Reference};
 use crate::rule::Rule;
@@ -48,6 +51,10 @@ struct ScenarioFile {
     #[serde(default)]
     platform: PlatformFile,
     controller: Option<ControllerSettings>,
+    /// Read key by key (see [`crate::compensation`]).
+    compensation: Option<toml::Table>,
+    /// Read key by key (see [`crate::compensation`]).
+    dob: Option<toml::Table>,
     /// Read key by key (see `Checker::reference`), so that an error
     /// names the key rather than the table.
     #[serde(default)]
@@ -399,6 +406,10 @@ pub struct Scenario {
     pub platform_velocity: f64,
     /// Servo controller, if any.
     pub controller: Option<ControllerSettings>,
+    /// Feedforward friction compensation in the servo, if any.
+    pub compensation: Option<CompensationSettings>,
+    /// Disturbance observer in the servo, if any (`[dob]`).
+    pub observer: Option<ObserverSettings>,
     /// Reference for the controller.
     pub reference: Reference,
     /// Overrides in file order (sorted by target, then key).
@@ -459,6 +470,26 @@ impl Scenario {
                 Gain::RULE.check(controller.gain(gain)).map_err(|e| {
                     checker.error(&format!("controller.{}", gain.key()), e.to_string())
                 })?;
+            }
+        }
+        let compensation = match &raw.compensation {
+            Some(table) => read_compensation(table).map_err(|(key, m)| checker.error(&key, m))?,
+            None => None,
+        };
+        let observer = match &raw.dob {
+            Some(table) => Some(read_observer(table).map_err(|(key, m)| checker.error(&key, m))?),
+            None => None,
+        };
+        if raw.controller.is_none() {
+            let table = [
+                ("compensation", compensation.is_some()),
+                ("dob", observer.is_some()),
+            ];
+            if let Some((key, _)) = table.iter().find(|(_, present)| *present) {
+                return Err(checker.error(
+                    key,
+                    "acts in the servo, and the scenario has no [controller]: add one",
+                ));
             }
         }
         let reference = checker.reference(raw.reference, base)?;
@@ -550,6 +581,8 @@ impl Scenario {
             gravity: raw.gravity,
             platform_velocity: raw.platform.velocity,
             controller: raw.controller,
+            compensation,
+            observer,
             reference,
             overrides,
             initial: raw.initial,
@@ -703,7 +736,8 @@ impl Checker<'_> {
                 ),
             ));
         }
-        let number = |key: &str, default: Option<f64>, rule: Rule| -> Result<f64, LoadError> {
+        let number = |key: &str, default: Option<f64>| -> Result<f64, LoadError> {
+            let rule = Reference::key_rule(key);
             let path = format!("reference.{key}");
             let value = match (table.get(key), default) {
                 (Some(toml::Value::Float(v)), _) => *v,
@@ -735,33 +769,32 @@ impl Checker<'_> {
                 )),
             }
         };
-        use Rule::{Finite, NonNegative, Positive};
         Ok(match kind {
             "constant" => Reference::Constant {
-                value: number("value", Some(0.0), Finite)?,
+                value: number("value", Some(0.0))?,
             },
             "step" => Reference::Step {
-                time: number("time", None, NonNegative)?,
-                initial: number("initial", Some(0.0), Finite)?,
-                value: number("value", None, Finite)?,
+                time: number("time", None)?,
+                initial: number("initial", Some(0.0))?,
+                value: number("value", None)?,
             },
             "ramp" => Reference::Ramp {
-                start: number("start", Some(0.0), NonNegative)?,
-                initial: number("initial", Some(0.0), Finite)?,
-                velocity: number("velocity", None, Finite)?,
+                start: number("start", Some(0.0))?,
+                initial: number("initial", Some(0.0))?,
+                velocity: number("velocity", None)?,
             },
             "sine" => Reference::Sine {
-                amplitude: number("amplitude", None, Finite)?,
-                frequency_hz: number("frequency", None, Positive)?,
-                phase: number("phase", Some(0.0), Finite)?,
-                offset: number("offset", Some(0.0), Finite)?,
+                amplitude: number("amplitude", None)?,
+                frequency_hz: number("frequency", None)?,
+                phase: number("phase", Some(0.0))?,
+                offset: number("offset", Some(0.0))?,
             },
             "circle" => Reference::Circle {
-                radius: number("radius", None, Positive)?,
-                tangential_velocity: number("tangential_velocity", None, Finite)?,
+                radius: number("radius", None)?,
+                tangential_velocity: number("tangential_velocity", None)?,
             },
             "staircase" => {
-                let steps = number("steps", Some(1.0), Positive)?;
+                let steps = number("steps", Some(1.0))?;
                 if !(steps.fract() == 0.0 && steps <= 1e6) {
                     return Err(self.error(
                         "reference.steps",
@@ -779,11 +812,11 @@ impl Checker<'_> {
                     }
                 };
                 Reference::Staircase {
-                    start: number("start", Some(0.0), NonNegative)?,
-                    initial: number("initial", Some(0.0), Finite)?,
-                    step: number("step", None, Finite)?,
-                    move_time: number("move_time", None, Positive)?,
-                    dwell: number("dwell", None, NonNegative)?,
+                    start: number("start", Some(0.0))?,
+                    initial: number("initial", Some(0.0))?,
+                    step: number("step", None)?,
+                    move_time: number("move_time", None)?,
+                    dwell: number("dwell", None)?,
                     steps: steps as usize,
                     profile,
                 }
@@ -794,10 +827,10 @@ impl Checker<'_> {
                 &text("position_column", Some("position"))?,
             )?,
             _ => Reference::PointToPoint {
-                start: number("start", None, NonNegative)?,
-                duration: number("duration", None, Positive)?,
-                initial: number("initial", Some(0.0), Finite)?,
-                distance: number("distance", None, Finite)?,
+                start: number("start", None)?,
+                duration: number("duration", None)?,
+                initial: number("initial", Some(0.0))?,
+                distance: number("distance", None)?,
             },
         })
     }

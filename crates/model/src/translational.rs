@@ -160,16 +160,13 @@ impl TranslationalMap {
         let command = match &model.controller {
             Some(controller) => {
                 let sensor = row::<N>(&self.sensor_rows, nv, controller.sensor);
-                let integral = controller.integral_index.map_or(S::zero(), |i| x[i]);
-                let (f, error) = controller.law(
+                let (f, values) = controller.law(
                     S::constant(self.sensor_offsets[controller.sensor]) + dot(sensor, q),
                     dot(sensor, v),
-                    integral,
+                    x,
                     inputs,
                 );
-                if let Some(index) = controller.integral_index {
-                    dx[index] = error;
-                }
+                controller.write_rates(&values, dx);
                 f
             }
             None => S::zero(),

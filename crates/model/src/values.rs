@@ -4,6 +4,7 @@
 use crate::elements::Inputs;
 use crate::reference::ReferenceSample;
 use crate::scalar::Scalar;
+use crate::servo::ServoValues;
 
 /// Model inputs in any scalar type (see [`Inputs`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -53,6 +54,6 @@ pub struct ElementValues<S = f64> {
     pub isolator_rate: Vec<[S; 6]>,
     /// Reference used by the controller.
     pub reference: ReferenceSample,
-    /// Tracking error x - x_r of the controller, m.
-    pub tracking_error: S,
+    /// The servo's tracking error, compensator values and state rates.
+    pub servo: ServoValues<S>,
 }

@@ -139,6 +139,7 @@ impl Distribution {
             Rule::NonNegative => low >= 0.0,
             Rule::Positive => low > 0.0 || (low == 0.0 && low_open),
             Rule::Spread => low > -1.0 && high < 1.0,
+            Rule::RelativeChange => low > -1.0 || (low == -1.0 && low_open),
         };
         if fits {
             return Ok(());

@@ -1,0 +1,423 @@
+//! The `[compensation]` and `[dob]` tables of a scenario: model-based
+//! feedforward friction compensation and a disturbance observer, as written
+//! and checked, before the model is assembled.
+//!
+//! ```toml
+//! [compensation]
+//! kind = "lugre"                 # none | lugre | dahl
+//! element = "bearing_friction"   # the friction element it models (its parameters are the default)
+//! error = { sigma0 = 0.5 }       # relative errors on the model: +50% sigma0
+//! # explicit model parameters instead of (or on top of) the element's:
+//! # sigma0 = 2.2e6, f_c = 5.1, ...   (dahl: sigma, f_c, exponent)
+//! through_isolator = true        # default: true when an isolator carries the element
+//!
+//! [dob]
+//! bandwidth = 50.0               # Hz, the Q-filter's cut-off
+//! nominal_mass = 1.5             # kg, the nominal plant 1 / (m s^2)
+//! ```
+//!
+//! The compensator's model is the element's parameters, then the explicit
+//! values, then the relative errors (`value * (1 + error)`). A Dahl model
+//! taken from a LuGre element starts from `sigma = sigma0`, the element's
+//! `f_c` and `exponent = 1`. When an isolator joins the element's link to the
+//! rest of the stage, the model is the friction *as felt through the
+//! isolator* (see [`crate::servo::FrictionModel::felt_through`]).
+
+use std::collections::BTreeMap;
+
+use crate::dahl::DahlParams;
+use crate::error::LoadError;
+use crate::lugre::LugreParams;
+use crate::robot::RobotSpec;
+use crate::rule::Rule;
+use crate::servo::FrictionModel;
+
+/// Which friction model the feedforward compensator simulates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum CompensationKind {
+    /// LuGre, the six parameters of [`LugreParams`].
+    Lugre,
+    /// Dahl, the three parameters of [`DahlParams`].
+    Dahl,
+}
+
+/// One parameter of a compensator model, whichever the kind.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ModelKey {
+    /// Name in files and parameter paths.
+    pub name: &'static str,
+    /// SI unit.
+    pub unit: &'static str,
+    /// The rule its value meets.
+    pub rule: Rule,
+    /// What it is, in a few words.
+    pub description: &'static str,
+}
+
+impl CompensationKind {
+    /// The name in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Lugre => "lugre",
+            Self::Dahl => "dahl",
+        }
+    }
+
+    /// The model's parameters in file order.
+    pub fn keys(self) -> Vec<ModelKey> {
+        let key = |name, unit, rule, description| ModelKey {
+            name,
+            unit,
+            rule,
+            description,
+        };
+        match self {
+            Self::Lugre => (LugreParams::KEYS.iter())
+                .map(|k| key(k.name, k.unit, k.rule, k.description))
+                .collect(),
+            Self::Dahl => (DahlParams::KEYS.iter())
+                .map(|k| key(k.name, k.unit, k.rule, k.description))
+                .collect(),
+        }
+    }
+
+    /// The parameter named `name`.
+    pub fn key(self, name: &str) -> Option<ModelKey> {
+        self.keys().into_iter().find(|k| k.name == name)
+    }
+
+    fn names(self) -> String {
+        let names: Vec<&str> = self.keys().iter().map(|k| k.name).collect();
+        names.join(", ")
+    }
+}
+
+/// The `[compensation]` table, checked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CompensationSettings {
+    /// The model simulated.
+    pub kind: CompensationKind,
+    /// The friction element modelled, whose parameters are the default.
+    pub element: Option<String>,
+    /// Explicit model parameters, by key name.
+    pub values: BTreeMap<&'static str, f64>,
+    /// Relative errors on the model, by key name: `value * (1 + error)`.
+    pub error: BTreeMap<&'static str, f64>,
+    /// Whether the model is the friction as felt through the isolator that
+    /// carries the element (`None`: whenever one does).
+    pub through_isolator: Option<bool>,
+}
+
+/// The disturbance observer's parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ObserverKey {
+    /// `bandwidth`, Hz: the cut-off of the first-order Q-filter.
+    Bandwidth,
+    /// `nominal_mass`, kg: the nominal plant `1 / (m s^2)`.
+    NominalMass,
+}
+
+impl ObserverKey {
+    /// Both, in file order.
+    pub const ALL: [ObserverKey; 2] = [ObserverKey::Bandwidth, ObserverKey::NominalMass];
+
+    /// Name under `[dob]`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Bandwidth => "bandwidth",
+            Self::NominalMass => "nominal_mass",
+        }
+    }
+
+    /// SI unit.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Self::Bandwidth => "Hz",
+            Self::NominalMass => "kg",
+        }
+    }
+
+    /// What it is, in a few words.
+    pub fn description(self) -> &'static str {
+        match self {
+            Self::Bandwidth => "disturbance observer Q-filter bandwidth",
+            Self::NominalMass => "disturbance observer nominal mass",
+        }
+    }
+
+    /// Both must be positive.
+    pub const RULE: Rule = Rule::Positive;
+}
+
+/// The `[dob]` table, checked.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ObserverSettings {
+    /// Q-filter cut-off, Hz.
+    pub bandwidth: f64,
+    /// Nominal mass, kg.
+    pub nominal_mass: f64,
+}
+
+impl ObserverSettings {
+    /// One parameter.
+    pub fn get(&self, key: ObserverKey) -> f64 {
+        match key {
+            ObserverKey::Bandwidth => self.bandwidth,
+            ObserverKey::NominalMass => self.nominal_mass,
+        }
+    }
+
+    /// One parameter, to write (unchecked: see [`crate::Parameter`]).
+    pub fn get_mut(&mut self, key: ObserverKey) -> &mut f64 {
+        match key {
+            ObserverKey::Bandwidth => &mut self.bandwidth,
+            ObserverKey::NominalMass => &mut self.nominal_mass,
+        }
+    }
+}
+
+/// The rule of a relative model error: the factor `1 + error` stays positive.
+pub const ERROR_RULE: Rule = Rule::RelativeChange;
+
+/// A number of a table, by path, for the readers below.
+fn number(path: &str, value: &toml::Value) -> Result<f64, String> {
+    match value {
+        toml::Value::Float(v) => Ok(*v),
+        toml::Value::Integer(v) => Ok(*v as f64),
+        other => Err(format!(
+            "{path}: must be a number, got {}",
+            other.type_str()
+        )),
+    }
+}
+
+/// Reads `[compensation]` key by key; `Ok(None)` for `kind = "none"`. An
+/// error is (key path, message).
+pub(crate) fn read_compensation(
+    table: &toml::Table,
+) -> Result<Option<CompensationSettings>, (String, String)> {
+    let at = |key: &str, message: String| (format!("compensation.{key}"), message);
+    let kind = match table.get("kind") {
+        None => return Err(at("kind", "missing: none, lugre or dahl".into())),
+        Some(toml::Value::String(kind)) => match kind.as_str() {
+            "none" => None,
+            "lugre" => Some(CompensationKind::Lugre),
+            "dahl" => Some(CompensationKind::Dahl),
+            other => {
+                return Err(at(
+                    "kind",
+                    format!("unknown kind \"{other}\" (none, lugre or dahl)"),
+                ));
+            }
+        },
+        Some(other) => {
+            return Err(at(
+                "kind",
+                format!("must be a string, got {}", other.type_str()),
+            ));
+        }
+    };
+    let Some(kind) = kind else {
+        return match table.keys().find(|k| *k != "kind") {
+            Some(key) => Err(at(key, "kind = \"none\" takes no other key".into())),
+            None => Ok(None),
+        };
+    };
+    let mut settings = CompensationSettings {
+        kind,
+        element: None,
+        values: BTreeMap::new(),
+        error: BTreeMap::new(),
+        through_isolator: None,
+    };
+    for (key, value) in table {
+        match (key.as_str(), value) {
+            ("kind", _) => {}
+            ("element", toml::Value::String(name)) if name.is_empty() => {
+                return Err(at(key, "is empty: name a friction element".into()));
+            }
+            ("element", toml::Value::String(name)) => settings.element = Some(name.clone()),
+            ("through_isolator", toml::Value::Boolean(b)) => settings.through_isolator = Some(*b),
+            ("element" | "through_isolator", other) => {
+                let wanted = if key == "element" {
+                    "a string"
+                } else {
+                    "true or false"
+                };
+                return Err(at(
+                    key,
+                    format!("must be {wanted}, got {}", other.type_str()),
+                ));
+            }
+            ("error", toml::Value::Table(errors)) => {
+                for (name, value) in errors {
+                    let path = format!("compensation.error.{name}");
+                    let model_key = kind.key(name).ok_or_else(|| {
+                        (
+                            path.clone(),
+                            format!(
+                                "a {} model has no parameter \"{name}\" (it has {})",
+                                kind.name(),
+                                kind.names()
+                            ),
+                        )
+                    })?;
+                    let value = number(&path, value).map_err(|m| (path.clone(), m))?;
+                    ERROR_RULE
+                        .check(value)
+                        .map_err(|e| (path.clone(), e.to_string()))?;
+                    settings.error.insert(model_key.name, value);
+                }
+            }
+            ("error", other) => {
+                return Err(at(
+                    key,
+                    format!(
+                        "must be a table of relative errors such as {{ sigma0 = 0.5 }}, got {}",
+                        other.type_str()
+                    ),
+                ));
+            }
+            (name, value) => {
+                let model_key = kind.key(name).ok_or_else(|| {
+                    at(
+                        name,
+                        format!(
+                            "unknown key (kind, element, error, through_isolator, or a {} parameter: {})",
+                            kind.name(),
+                            kind.names()
+                        ),
+                    )
+                })?;
+                let path = format!("compensation.{name}");
+                let value = number(&path, value).map_err(|m| (path.clone(), m))?;
+                model_key
+                    .rule
+                    .check(value)
+                    .map_err(|e| (path.clone(), e.to_string()))?;
+                settings.values.insert(model_key.name, value);
+            }
+        }
+    }
+    Ok(Some(settings))
+}
+
+/// Reads `[dob]` key by key. An error is (key path, message).
+pub(crate) fn read_observer(table: &toml::Table) -> Result<ObserverSettings, (String, String)> {
+    if let Some(key) = table
+        .keys()
+        .find(|k| ObserverKey::ALL.iter().all(|o| o.name() != k.as_str()))
+    {
+        return Err((
+            format!("dob.{key}"),
+            "unknown key (bandwidth, nominal_mass)".into(),
+        ));
+    }
+    let value = |key: ObserverKey| -> Result<f64, (String, String)> {
+        let path = format!("dob.{}", key.name());
+        let value = table.get(key.name()).ok_or_else(|| {
+            (
+                path.clone(),
+                format!("missing: the observer needs its {}", key.description()),
+            )
+        })?;
+        let value = number(&path, value).map_err(|m| (path.clone(), m))?;
+        ObserverKey::RULE
+            .check(value)
+            .map_err(|e| (path.clone(), e.to_string()))?;
+        Ok(value)
+    };
+    Ok(ObserverSettings {
+        bandwidth: value(ObserverKey::Bandwidth)?,
+        nominal_mass: value(ObserverKey::NominalMass)?,
+    })
+}
+
+impl CompensationSettings {
+    /// The model before its errors: the element's parameters (a Dahl model
+    /// takes `sigma0` and `f_c` with exponent 1), then the explicit values.
+    /// A parameter with neither is named.
+    pub fn stated_model(
+        &self,
+        robot: &RobotSpec,
+        file: &std::path::Path,
+    ) -> Result<FrictionModel, LoadError> {
+        let error = |key: &str, message: String| LoadError::scenario(file, key, message);
+        let element = match &self.element {
+            Some(name) => Some(
+                robot
+                    .frictions
+                    .iter()
+                    .find(|f| &f.name == name)
+                    .ok_or_else(|| {
+                        let names: Vec<&str> =
+                            robot.frictions.iter().map(|f| f.name.as_str()).collect();
+                        error(
+                            "compensation.element",
+                            format!(
+                                "no friction element \"{name}\" in {} (it has: {})",
+                                robot.file.display(),
+                                if names.is_empty() {
+                                    "none".to_string()
+                                } else {
+                                    names.join(", ")
+                                }
+                            ),
+                        )
+                    })?,
+            ),
+            None => None,
+        };
+        let mut model = match (self.kind, element) {
+            (CompensationKind::Lugre, Some(f)) => FrictionModel::Lugre(f.lugre),
+            (CompensationKind::Dahl, Some(f)) => FrictionModel::Dahl(DahlParams {
+                sigma: f.lugre.sigma0,
+                f_c: f.lugre.f_c,
+                exponent: 1.0,
+            }),
+            (kind, None) => {
+                if let Some(missing) = kind
+                    .keys()
+                    .iter()
+                    .find(|k| !self.values.contains_key(k.name))
+                {
+                    return Err(error(
+                        &format!("compensation.{}", missing.name),
+                        format!(
+                            "missing: name an element, or give every {} parameter ({})",
+                            kind.name(),
+                            kind.names()
+                        ),
+                    ));
+                }
+                FrictionModel::unset(kind)
+            }
+        };
+        for (name, value) in &self.values {
+            model.set(name, *value);
+        }
+        Ok(model)
+    }
+
+    /// The model the compensator simulates at the bearing: the stated model
+    /// with its relative errors applied, checked.
+    pub fn bearing_model(
+        &self,
+        robot: &RobotSpec,
+        file: &std::path::Path,
+    ) -> Result<FrictionModel, LoadError> {
+        let mut model = self.stated_model(robot, file)?;
+        for (name, error) in &self.error {
+            let value = model.get(name) * (1.0 + error);
+            model.set(name, value);
+        }
+        model.validate().map_err(|(key, message)| {
+            LoadError::scenario(
+                file,
+                "compensation",
+                format!("the compensator's model breaks a rule after its errors: {key} {message}"),
+            )
+        })?;
+        Ok(model)
+    }
+}

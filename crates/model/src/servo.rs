@@ -1,0 +1,261 @@
+//! The servo law, written once for every evaluation path: PID on a sensor
+//! reading, model-based feedforward friction compensation driven by the
+//! reference, and a disturbance observer (DOB).
+//!
+//! ```text
+//! e    = x - x_r
+//! u_c  = -(k e + c e' + k_i integral(e)) + f_ff        (PID + feedforward)
+//! f    = u_c - d_hat                                    (the actuator force)
+//! f_ff = friction model driven by x_r', with its own state w:
+//!        LuGre: w = z_c,  (f_ff, z_c') = LuGre(x_r', z_c)
+//!        Dahl:  w = f_ff, f_ff' = Dahl(x_r', f_ff)
+//! d_hat = Q(s) (m_n s x' - f),  Q(s) = omega / (s + omega),  omega = 2 pi bandwidth
+//! ```
+//!
+//! The observer compares the force the nominal plant `1 / (m_n s^2)` needs
+//! for the measured motion with the force applied; the difference, low-pass
+//! filtered, is the disturbance estimate it subtracts. With the state
+//! `eta = d_hat - omega m_n x'` it needs one state and no acceleration:
+//! `eta' = -omega (f + d_hat) = -omega u_c`. A constant disturbance is
+//! rejected exactly in steady state (`u_c` integrates to zero).
+
+use crate::dahl::DahlParams;
+use crate::elements::{Controller, StateKind};
+use crate::lugre::LugreParams;
+use crate::scalar::Scalar;
+use crate::values::InputValues;
+
+/// A friction model a compensator simulates.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FrictionModel {
+    /// LuGre; the state is the compensator's bristle deflection, m.
+    Lugre(LugreParams),
+    /// Dahl; the state is the friction force, N.
+    Dahl(DahlParams),
+}
+
+impl FrictionModel {
+    /// A model of `kind` with every parameter unset (NaN), to be filled.
+    pub(crate) fn unset(kind: crate::compensation::CompensationKind) -> Self {
+        use crate::compensation::CompensationKind;
+        let nan = f64::NAN;
+        match kind {
+            CompensationKind::Lugre => Self::Lugre(LugreParams {
+                sigma0: nan,
+                sigma1: nan,
+                sigma2: nan,
+                f_c: nan,
+                f_s: nan,
+                v_s: nan,
+            }),
+            CompensationKind::Dahl => Self::Dahl(DahlParams {
+                sigma: nan,
+                f_c: nan,
+                exponent: nan,
+            }),
+        }
+    }
+
+    /// A parameter by name (NaN for a name the model does not have).
+    pub fn get(&self, name: &str) -> f64 {
+        match self {
+            Self::Lugre(p) => LugreParams::key(name).map_or(f64::NAN, |k| k.get(p)),
+            Self::Dahl(p) => DahlParams::key(name).map_or(f64::NAN, |k| k.get(p)),
+        }
+    }
+
+    /// Sets a parameter by name (a name the model does not have is ignored).
+    pub fn set(&mut self, name: &str, value: f64) {
+        match self {
+            Self::Lugre(p) => {
+                if let Some(k) = LugreParams::key(name) {
+                    k.set(p, value);
+                }
+            }
+            Self::Dahl(p) => {
+                if let Some(k) = DahlParams::key(name) {
+                    k.set(p, value);
+                }
+            }
+        }
+    }
+
+    /// The first parameter that breaks a rule: (name, what it must be).
+    pub fn validate(&self) -> Result<(), (&'static str, String)> {
+        match self {
+            Self::Lugre(p) => p.validate().map_err(|e| {
+                let message = e.to_string();
+                let tail = message.strip_prefix(e.name).unwrap_or(&message).trim();
+                (e.name, tail.to_string())
+            }),
+            Self::Dahl(p) => p.validate(),
+        }
+    }
+
+    /// The model as felt through an isolator of stiffness `k_j` and damping
+    /// `c_j` along the contact axis, the bearing's mass neglected (paper
+    /// Section 2.1). In pre-motion the contact is a spring and damper
+    /// (`sigma0`, `sigma1`) in series with the isolator's (`k_j`, `c_j`); at
+    /// low frequency the pair acts as the stiffness
+    /// `k_c = sigma0 k_j / (sigma0 + k_j)` (Eq. 1) and the damping
+    /// `(sigma1 k_j^2 + c_j sigma0^2) / (sigma0 + k_j)^2`. Sliding forces
+    /// (`f_c`, `f_s`, `v_s`, `sigma2`) pass through the isolator unchanged.
+    /// A Dahl model's stiffness combines the same way.
+    pub fn felt_through(&self, k_j: f64, c_j: f64) -> Self {
+        let series = |k: f64| k * k_j / (k + k_j);
+        match *self {
+            Self::Lugre(p) => {
+                let total = p.sigma0 + k_j;
+                Self::Lugre(LugreParams {
+                    sigma0: series(p.sigma0),
+                    sigma1: (p.sigma1 * k_j * k_j + c_j * p.sigma0 * p.sigma0) / (total * total),
+                    ..p
+                })
+            }
+            Self::Dahl(p) => Self::Dahl(DahlParams {
+                sigma: series(p.sigma),
+                ..p
+            }),
+        }
+    }
+
+    /// The friction force the model predicts at velocity `v` and internal
+    /// state `w`, and the state's rate.
+    #[inline(always)]
+    pub(crate) fn force_and_rate<S: Scalar>(&self, v: S, w: S) -> (S, S) {
+        match self {
+            Self::Lugre(p) => p.force_and_z_rate_of(v, w),
+            Self::Dahl(p) => (w, p.force_rate_of(v, w)),
+        }
+    }
+
+    /// What its state is, its name suffix and its typical size.
+    pub(crate) fn state(&self) -> (StateKind, &'static str, f64) {
+        match self {
+            Self::Lugre(p) => (StateKind::CompensatorBristle, "z", p.f_s / p.sigma0),
+            Self::Dahl(p) => (StateKind::CompensatorForce, "f_d", p.f_c),
+        }
+    }
+}
+
+/// Feedforward friction compensation: a friction model driven by the
+/// reference velocity, simulated with its own state.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Feedforward {
+    /// The name of the friction element it models, when it models one.
+    pub element: Option<String>,
+    /// The model simulated (as felt at the servo, after any isolator).
+    pub model: FrictionModel,
+    /// Index of the model's state in the state vector.
+    pub state_index: usize,
+}
+
+/// A disturbance observer with a first-order Q-filter.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Observer {
+    /// Nominal mass m_n, kg.
+    pub nominal_mass: f64,
+    /// Q-filter cut-off omega, rad/s (2 pi times the bandwidth in Hz).
+    pub cutoff: f64,
+    /// Index of the observer state eta in the state vector.
+    pub state_index: usize,
+}
+
+/// What the servo law gives besides its force: the tracking error, the
+/// compensators' contributions, and the rates of the servo's own states in
+/// the order integral, feedforward, observer.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ServoValues<S> {
+    /// Tracking error x - x_r, m.
+    pub error: S,
+    /// Feedforward friction compensation force, N.
+    pub feedforward: S,
+    /// Disturbance estimate d_hat, N.
+    pub estimate: S,
+    /// Rates of the integral, the feedforward state and the observer state.
+    rates: [S; 3],
+}
+
+impl<S: Scalar> ServoValues<S> {
+    /// All zero.
+    pub fn zero() -> Self {
+        Self {
+            error: S::zero(),
+            feedforward: S::zero(),
+            estimate: S::zero(),
+            rates: [S::zero(); 3],
+        }
+    }
+}
+
+impl Controller {
+    /// The servo's own states in the order of [`ServoValues`]'s rates.
+    fn state_slots(&self) -> [Option<usize>; 3] {
+        [
+            self.integral_index,
+            self.feedforward.as_ref().map(|f| f.state_index),
+            self.observer.as_ref().map(|o| o.state_index),
+        ]
+    }
+
+    /// The servo law at a sensor reading and rate: the actuator force and
+    /// the values of [`ServoValues`].
+    #[inline(always)]
+    pub(crate) fn law<S: Scalar>(
+        &self,
+        position: S,
+        velocity: S,
+        x: &[S],
+        inputs: &InputValues<S>,
+    ) -> (S, ServoValues<S>) {
+        let error = position - inputs.reference_position;
+        let error_rate = velocity - inputs.reference_velocity;
+        let integral = self.integral_index.map_or(S::zero(), |i| x[i]);
+        let mut values = ServoValues::zero();
+        values.error = error;
+        values.rates[0] = error;
+        let mut command = -(S::constant(self.k) * error
+            + S::constant(self.c) * error_rate
+            + S::constant(self.k_i) * integral);
+        if let Some(feedforward) = &self.feedforward {
+            let (force, rate) = feedforward
+                .model
+                .force_and_rate(inputs.reference_velocity, x[feedforward.state_index]);
+            values.feedforward = force;
+            values.rates[1] = rate;
+            command += force;
+        }
+        let mut force = command;
+        if let Some(observer) = &self.observer {
+            let cutoff = S::constant(observer.cutoff);
+            let estimate =
+                x[observer.state_index] + cutoff * S::constant(observer.nominal_mass) * velocity;
+            values.estimate = estimate;
+            values.rates[2] = -cutoff * command;
+            force = command - estimate;
+        }
+        (force, values)
+    }
+
+    /// Writes the rates of the servo's own states into `dx`.
+    #[inline(always)]
+    pub(crate) fn write_rates<S: Scalar>(&self, values: &ServoValues<S>, dx: &mut [S]) {
+        for (slot, rate) in self.state_slots().iter().zip(values.rates) {
+            if let Some(index) = slot {
+                dx[*index] = rate;
+            }
+        }
+    }
+
+    /// The servo's own states and their rates: (state index, rate).
+    pub fn state_rates<S: Scalar>(
+        &self,
+        values: &ServoValues<S>,
+    ) -> impl Iterator<Item = (usize, S)> + '_ {
+        let rates = values.rates;
+        self.state_slots()
+            .into_iter()
+            .zip(rates)
+            .filter_map(|(slot, rate)| slot.map(|i| (i, rate)))
+    }
+}

@@ -1,0 +1,257 @@
+//! Friction compensation in the servo (paper Section 2): model-based
+//! feedforward and the disturbance observer, against what must hold
+//! whatever the stage.
+//!
+//! - An exact LuGre model fed forward removes the friction error of steady
+//!   constant-velocity tracking; an error in its Coulomb level leaves the
+//!   steady error `(f_hat - f) / k` that a static balance predicts, and an
+//!   error in its pre-motion stiffness leaves none (sigma0 acts only in
+//!   pre-motion).
+//! - A disturbance observer with the true mass rejects a constant
+//!   disturbance completely, and its estimate is that disturbance.
+//! - The stiffness the servo feels through a friction isolator follows the
+//!   series law of paper Eq. 1, statically and in the low-frequency
+//!   compliance of the stage's simulated FRF.
+
+use fistage_model::{EquilibriumKind, Inputs};
+use fistage_tests::{load_text, run, stats};
+
+const RIGID: &str = "robots/stage_1dof_rigid.urdf";
+const FI: &str = "robots/stage_1dof_fi.urdf";
+
+/// PD tracking of a 20 mm/s ramp (k = 1e5 N/m, c = 200 N s/m), with
+/// `extra` appended: the steady tracking error, m.
+fn ramp_error(robot: &str, extra: &str) -> f64 {
+    let text = format!(
+        "robot = {robot:?}\nduration = 1.0\n[controller]\nsensor = \"encoder\"\nactuator = \"drive\"\nk = 1e5\nc = 200.0\n\
+         [reference]\nkind = \"ramp\"\nvelocity = 0.02\n[statistics]\nwindow = [0.5, 1.0]\n{extra}"
+    );
+    let output = run(&load_text(&text));
+    let error = stats(&output, "controller.error");
+    assert!(
+        error.peak_to_peak < 1e-3 * error.mean.abs().max(1e-12),
+        "not steady: {error:?}"
+    );
+    error.mean
+}
+
+#[test]
+fn exact_lugre_feedforward_removes_the_steady_friction_error() {
+    let lugre = fistage_model::LugreParams::paper_table1();
+    let v = 0.02;
+    let friction = lugre.steady_state_force(v);
+    let bare = ramp_error(RIGID, "");
+    // Static balance: k e = -f_ss(v).
+    assert!(
+        (bare + friction / 1e5).abs() < 1e-4 * bare.abs(),
+        "{bare} vs {}",
+        -friction / 1e5
+    );
+    let exact = ramp_error(
+        RIGID,
+        "[compensation]\nkind = \"lugre\"\nelement = \"bearing_friction\"\n",
+    );
+    println!("steady error: none {bare:.4e} m, exact LuGre feedforward {exact:.4e} m");
+    assert!(exact.abs() < 1e-6 * bare.abs(), "{exact} vs {bare}");
+    // A level error leaves (f_hat - f) / k, linear in the error.
+    for error in [-0.2, -0.1, 0.05, 0.1, 0.2] {
+        let wrong = ramp_error(
+            RIGID,
+            &format!(
+                "[compensation]\nkind = \"lugre\"\nelement = \"bearing_friction\"\nerror = {{ f_c = {error:?}, f_s = {error:?} }}\n"
+            ),
+        );
+        let mut model = lugre;
+        model.f_c *= 1.0 + error;
+        model.f_s *= 1.0 + error;
+        let expected = (model.steady_state_force(v) - friction) / 1e5;
+        println!(
+            "level error {error:+}: steady error {wrong:.4e} m (static balance {expected:.4e})"
+        );
+        assert!(
+            (wrong - expected).abs() < 1e-3 * expected.abs(),
+            "{wrong} vs {expected}"
+        );
+    }
+    // Sigma0 acts only in pre-motion: +50% leaves the steady error at zero.
+    let stiff = ramp_error(
+        RIGID,
+        "[compensation]\nkind = \"lugre\"\nelement = \"bearing_friction\"\nerror = { sigma0 = 0.5 }\n",
+    );
+    assert!(stiff.abs() < 1e-6 * bare.abs(), "{stiff}");
+}
+
+/// The same steady state with explicit parameters instead of an element,
+/// and with the Dahl model (whose steady level is f_c): the Dahl model
+/// leaves the Stribeck excess and the viscous term uncompensated.
+#[test]
+fn explicit_and_dahl_models_compensate_their_own_steady_level() {
+    let lugre = fistage_model::LugreParams::paper_table1();
+    let v = 0.02;
+    let explicit = ramp_error(
+        RIGID,
+        "[compensation]\nkind = \"lugre\"\nsigma0 = 2.2e6\nsigma1 = 237.0\nsigma2 = 14.2\nf_c = 5.1\nf_s = 6.5\nv_s = 0.0167\n",
+    );
+    assert!(
+        explicit.abs() < 1e-6 * lugre.steady_state_force(v) / 1e5,
+        "{explicit}"
+    );
+    let dahl = ramp_error(
+        RIGID,
+        "[compensation]\nkind = \"dahl\"\nelement = \"bearing_friction\"\n",
+    );
+    let expected = (lugre.f_c - lugre.steady_state_force(v)) / 1e5;
+    assert!(
+        (dahl - expected).abs() < 1e-3 * expected.abs(),
+        "{dahl} vs {expected}"
+    );
+}
+
+/// The table held at its reference while the counter-surface slides under
+/// the bearing at 20 mm/s: the friction is a constant disturbance. The PD
+/// servo leaves the offset `d / k`; with the observer (true mass 1.5 kg) the
+/// offset vanishes and the estimate equals the disturbance, for any
+/// bandwidth.
+#[test]
+fn disturbance_observer_rejects_a_constant_disturbance() {
+    let held = |dob: &str| {
+        let text = format!(
+            "robot = {RIGID:?}\nduration = 2.0\n[platform]\nvelocity = 0.02\n[controller]\nsensor = \"encoder\"\nactuator = \"drive\"\nk = 6e4\nc = 100.0\n\
+             [statistics]\nwindow = [1.5, 2.0]\n{dob}"
+        );
+        let output = run(&load_text(&text));
+        let error = stats(&output, "controller.error");
+        let friction = stats(&output, "bearing_friction.force");
+        let estimate = output
+            .summary
+            .iter()
+            .find(|s| s.name == "dob.estimate")
+            .map(|s| s.stats.mean);
+        (error.mean, friction.mean, estimate)
+    };
+    let (offset, friction, none) = held("");
+    assert!(none.is_none());
+    // The platform drags the table along +x: the disturbance is -friction.
+    let disturbance = -friction;
+    assert!(
+        (offset - disturbance / 6e4).abs() < 1e-6 * offset.abs(),
+        "{offset} vs {}",
+        disturbance / 6e4
+    );
+    for bandwidth in [10.0, 50.0, 200.0] {
+        let (error, _, estimate) = held(&format!(
+            "[dob]\nbandwidth = {bandwidth:?}\nnominal_mass = 1.5\n"
+        ));
+        let estimate = estimate.expect("an observer");
+        println!(
+            "DOB {bandwidth} Hz: offset {error:.3e} m (PD alone {offset:.3e} m), estimate {estimate:.6} N (disturbance {disturbance:.6} N)"
+        );
+        assert!(error.abs() < 1e-6 * offset.abs(), "{error}");
+        assert!(
+            (estimate - disturbance).abs() < 1e-6 * disturbance.abs(),
+            "{estimate} vs {disturbance}"
+        );
+    }
+}
+
+/// The combined stiffness of paper Eq. 1, `k_c = k_f k_j / (k_f + k_j)`,
+/// and its sensitivity `dk_c/dk_f = (psi / (1 + psi))^2`, from the static
+/// balance of the open-loop FI stage under a force on the table (the
+/// sticking equilibrium: the bristles are the pre-motion spring k_f =
+/// sigma0).
+#[test]
+fn static_series_stiffness_follows_eq1() {
+    let k_j = 4e4;
+    let stiffness = |robot: &str, sigma0: f64| {
+        let text = format!(
+            "robot = {robot:?}\nduration = 1.0\n[overrides.bearing_friction]\nsigma0 = {sigma0:?}\n"
+        );
+        let loaded = load_text(&text);
+        let model = &loaded.model;
+        let force = 0.5;
+        let inputs = Inputs {
+            servo_force: force,
+            ..Inputs::default()
+        };
+        let x = model
+            .equilibrium(EquilibriumKind::Sticking, &inputs, &model.zero_state())
+            .expect("a sticking equilibrium");
+        force / x[model.layout().index("table_x.q").expect("table_x")]
+    };
+    for sigma0 in [2.2e5, 2.2e6, 2.2e7] {
+        let k_c = stiffness(FI, sigma0);
+        let expected = sigma0 * k_j / (sigma0 + k_j);
+        assert!((k_c / expected - 1.0).abs() < 1e-9, "{k_c} vs {expected}");
+        let rigid = stiffness(RIGID, sigma0);
+        assert!((rigid / sigma0 - 1.0).abs() < 1e-9, "{rigid} vs {sigma0}");
+        let h = 1e-3 * sigma0;
+        let slope = (stiffness(FI, sigma0 + h) - stiffness(FI, sigma0 - h)) / (2.0 * h);
+        let psi = k_j / sigma0;
+        let eq1 = (psi / (1.0 + psi)).powi(2);
+        println!(
+            "sigma0 {sigma0:.2e}: k_c {k_c:.6e} N/m, dk_c/dk_f {slope:.4e} (Eq. 1: {eq1:.4e})"
+        );
+        assert!((slope / eq1 - 1.0).abs() < 1e-4, "{slope} vs {eq1}");
+    }
+}
+
+/// Eq. 1 a second time, dynamically: the low-frequency compliance of the
+/// open-loop stage from its simulated stepped-sine FRF (1 Hz, far below
+/// every mode, 0.01 N so the bristles stay in pre-motion), with and without
+/// the isolator, as k_f = sigma0 varies by +-20%. Without the isolator the
+/// stiffness the servo feels moves one for one with k_f; with it, by the
+/// factor (psi / (1 + psi))^2 of Eq. 1.
+#[test]
+fn low_frequency_compliance_follows_eq1() {
+    use fistage_analysis::lab::{FrfLab, LabStage};
+    let folder = std::env::temp_dir().join(format!("fistage-eq1-{}", std::process::id()));
+    std::fs::create_dir_all(&folder).expect("a scratch folder");
+    let lab = FrfLab {
+        frequencies_hz: vec![1.0],
+        settle_time: 2.0,
+        measure_time: 2.0,
+        ..FrfLab::paper_like(1, 0).exact()
+    };
+    let felt = |robot: &str, sigma0: f64| {
+        let file = folder.join(format!(
+            "{}_{sigma0:e}.toml",
+            if robot == FI { "fi" } else { "rigid" }
+        ));
+        let text = format!(
+            "robot = {:?}\nduration = 1.0\n[overrides.bearing_friction]\nsigma0 = {sigma0:?}\n",
+            fistage_tests::path(robot)
+        );
+        std::fs::write(&file, text).expect("scenario written");
+        let stage = LabStage::load(&file).expect("a lab stage");
+        let measured = lab.measure(&stage).expect("an FRF");
+        1.0 / measured.runs[0].exact_response.norm()
+    };
+    let (k_j, k_f) = (4e4, 2.2e6);
+    for (robot, name) in [(RIGID, "rigid"), (FI, "FI")] {
+        let nominal = felt(robot, k_f);
+        let low = felt(robot, 0.8 * k_f);
+        let high = felt(robot, 1.2 * k_f);
+        let slope = (high - low) / (0.4 * k_f);
+        let series = |k: f64| if robot == FI { k * k_j / (k + k_j) } else { k };
+        let static_k = series(k_f);
+        // The static law's own secant over the same +-20% (the tangent of
+        // Eq. 1 at k_f is printed beside it; the two differ by the
+        // curvature of the series law, 4% here).
+        let secant = (series(1.2 * k_f) - series(0.8 * k_f)) / (0.4 * k_f);
+        let psi = k_j / k_f;
+        let eq1 = if robot == FI {
+            (psi / (1.0 + psi)).powi(2)
+        } else {
+            1.0
+        };
+        println!(
+            "{name}: felt stiffness at 1 Hz {nominal:.6e} N/m (static {static_k:.6e}), secant dk/dk_f over +-20% {slope:.4e} (series law {secant:.4e}; Eq. 1 tangent {eq1:.4e})"
+        );
+        assert!(
+            (nominal / static_k - 1.0).abs() < 2e-3,
+            "{nominal} vs {static_k}"
+        );
+        assert!((slope / secant - 1.0).abs() < 5e-3, "{slope} vs {secant}");
+    }
+    let _ = std::fs::remove_dir_all(&folder);
+}
