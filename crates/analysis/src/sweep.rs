@@ -66,6 +66,10 @@ pub struct Axis {
     /// Spacing.
     #[serde(default = "linear")]
     pub spacing: Spacing,
+    /// Explicit values instead of a spacing (`values = [...]` in the file;
+    /// `from`, `to` and `points` then follow from it).
+    #[serde(default)]
+    pub list: Option<Vec<f64>>,
 }
 
 fn linear() -> Spacing {
@@ -75,6 +79,9 @@ fn linear() -> Spacing {
 impl Axis {
     /// The axis values, first to last.
     pub fn values(&self) -> Vec<f64> {
+        if let Some(list) = &self.list {
+            return list.clone();
+        }
         let n = self.points;
         if n == 1 {
             return vec![self.from];
@@ -132,6 +139,7 @@ impl SweepSpec {
             .sweep
             .clone()
             .ok_or_else(|| scenario.error("sweep", "the scenario has no [sweep] table"))?;
+        let raw = with_listed_axes(raw).map_err(|(key, m)| scenario.error(key, m))?;
         let spec: SweepSpec = raw.try_into().map_err(|e: toml::de::Error| {
             scenario.error("sweep", e.to_string().trim().to_string())
         })?;
@@ -184,7 +192,7 @@ impl SweepSpec {
     pub fn check_against(&self, scenario: &Scenario, robot: &RobotSpec) -> Result<(), LoadError> {
         for (k, axis) in self.axes.iter().enumerate() {
             let parameter = Parameter::resolve(&axis.parameter, scenario, robot)?;
-            for value in [axis.from, axis.to] {
+            for value in axis.values() {
                 parameter.check(value).map_err(|message| {
                     scenario.error(
                         format!("sweep.axis[{k}] ({})", axis.parameter),
@@ -227,6 +235,57 @@ impl SweepSpec {
             })
             .collect()
     }
+}
+
+/// Rewrites each `[[sweep.axis]]` given as `values = [...]` into the
+/// `from`, `to`, `points` and `list` it stands for; an axis with both is an
+/// error, as is a list that is empty, not numbers, or not finite.
+fn with_listed_axes(mut raw: toml::Value) -> Result<toml::Value, (String, String)> {
+    let Some(axes) = raw.get_mut("axis").and_then(|a| a.as_array_mut()) else {
+        return Ok(raw);
+    };
+    for (k, axis) in axes.iter_mut().enumerate() {
+        let Some(table) = axis.as_table_mut() else {
+            continue;
+        };
+        let Some(values) = table.remove("values") else {
+            continue;
+        };
+        let key = format!("sweep.axis[{k}].values");
+        if let Some(other) = ["from", "to", "points", "spacing"]
+            .iter()
+            .find(|o| table.contains_key(**o))
+        {
+            return Err((key, format!("gives the values; leave out {other}")));
+        }
+        let list: Option<Vec<f64>> = values.as_array().and_then(|items| {
+            items
+                .iter()
+                .map(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+                .collect()
+        });
+        let list = list
+            .filter(|l| !l.is_empty() && l.iter().all(|v| v.is_finite()))
+            .ok_or_else(|| {
+                (
+                    key.clone(),
+                    "must be a non-empty list of finite numbers".into(),
+                )
+            })?;
+        let mut sorted = list.clone();
+        sorted.sort_by(f64::total_cmp);
+        if sorted.windows(2).any(|w| w[0] == w[1]) {
+            return Err((key, "holds a value twice".into()));
+        }
+        table.insert("from".into(), list[0].into());
+        table.insert("to".into(), list[list.len() - 1].into());
+        table.insert("points".into(), (list.len() as i64).into());
+        table.insert(
+            "list".into(),
+            toml::Value::Array(list.into_iter().map(toml::Value::from).collect()),
+        );
+    }
+    Ok(raw)
 }
 
 /// What one grid point gave.

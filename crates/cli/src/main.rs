@@ -8,6 +8,7 @@ mod bench;
 mod bench_fmu;
 mod bench_robust;
 mod check;
+mod compare;
 mod figures;
 mod fmu;
 mod identify;
@@ -47,6 +48,8 @@ enum Command {
     Modes(modes::ModesArgs),
     /// Stability over a grid of one or two parameters (points.csv, points.json, map).
     Sweep(sweep::SweepArgs),
+    /// Tracking of several scenarios over a grid against a baseline (curves.csv, plots).
+    Compare(compare::CompareArgs),
     /// Tolerance analysis of a population of stages (samples.csv, summary.json, plots).
     Robust(robust::RobustArgs),
     /// Servo gains with the largest bandwidth that keep a whole population stable.
@@ -75,6 +78,7 @@ fn main() -> anyhow::Result<()> {
         Command::Check(args) => check::run(&args),
         Command::Modes(args) => modes::run(&args),
         Command::Sweep(args) => sweep::run(&args),
+        Command::Compare(args) => compare::run(&args),
         Command::Robust(args) => robust::run(&args),
         Command::Tune(args) => tune::run(&args),
         Command::Lyapunov(args) => lyapunov::run(&args),

@@ -66,6 +66,15 @@ impl Provenance {
         })
     }
 
+    /// Adds the content of another input file under `name` (a comparison's
+    /// further cases, say): pieces merge only when it agrees too.
+    pub fn with_file(mut self, name: &str, file: &Path) -> anyhow::Result<Self> {
+        let bytes =
+            std::fs::read(file).with_context(|| format!("cannot read {}", file.display()))?;
+        self.items.insert(name.to_string(), content_hash(&bytes));
+        Ok(self)
+    }
+
     /// Reads a folder's provenance; a folder without one holds no work of
     /// known origin.
     pub fn read(folder: &Path) -> anyhow::Result<Option<Self>> {

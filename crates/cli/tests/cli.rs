@@ -821,3 +821,101 @@ fn an_undetermined_fit_leaves_the_output_folder_alone() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `fistage compare` on the Fig. 3b scenarios: the reduction in
+/// curves.csv is 100 (1 - m / m_baseline) of the rows in points.csv, two
+/// shards merge into the single run's table, and the rerun resumes it.
+#[test]
+fn compare_reduction_follows_its_points_and_shards_merge() {
+    let case = repository().join("scenarios/paper/fig03b_dob_fi.toml");
+    let baseline = repository().join("scenarios/paper/fig03b_dob_rigid.toml");
+    let compare = |out: &Path, extra: &[&str]| {
+        let output = fistage()
+            .arg("compare")
+            .arg(&case)
+            .arg("--baseline")
+            .arg(&baseline)
+            .arg("--out")
+            .arg(out)
+            .args(extra)
+            .output()
+            .expect("fistage runs");
+        assert!(
+            output.status.success(),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        String::from_utf8_lossy(&output.stdout).into_owned()
+    };
+    let whole = scratch("compare-whole");
+    let stdout = compare(&whole, &[]);
+    assert!(stdout.contains("8 of 8 points"), "{stdout}");
+    let points = std::fs::read_to_string(whole.join("points.csv")).expect("points");
+    let header: Vec<&str> = points.lines().next().expect("header").split(',').collect();
+    assert_eq!(header[..2], ["case", "reference.step"]);
+    let settling = header
+        .iter()
+        .position(|c| *c == "settling_time")
+        .expect("column");
+    let rows: Vec<Vec<&str>> = points
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    let time_of = |case: &str, step: &str| -> f64 {
+        rows.iter()
+            .find(|r| r[0] == case && r[1] == step)
+            .and_then(|r| r[settling].parse().ok())
+            .unwrap_or_else(|| panic!("no {case} at {step}"))
+    };
+    let curves = std::fs::read_to_string(whole.join("curves.csv")).expect("curves");
+    let mut checked = 0;
+    for line in curves
+        .lines()
+        .skip(1)
+        .filter(|l| l.starts_with("fig03b_dob_fi,"))
+    {
+        let cells: Vec<&str> = line.split(',').collect();
+        let (fi, rigid) = (
+            time_of("fig03b_dob_fi", cells[1]),
+            time_of("fig03b_dob_rigid", cells[1]),
+        );
+        match cells[4].parse::<f64>() {
+            Ok(reduction) => {
+                assert!(
+                    (reduction - 100.0 * (1.0 - fi / rigid)).abs() < 1e-9,
+                    "{line}"
+                );
+                checked += 1;
+            }
+            Err(_) => assert_eq!(
+                rigid, 0.0,
+                "no reduction only against a baseline of 0: {line}"
+            ),
+        }
+    }
+    assert!(checked >= 3, "{curves}");
+    for file in [
+        "summary.json",
+        "settling_time.svg",
+        "settling_time_reduction.png",
+    ] {
+        assert!(whole.join(file).is_file(), "missing {file}");
+    }
+    let (a, b, merged) = (
+        scratch("compare-a"),
+        scratch("compare-b"),
+        scratch("compare-merged"),
+    );
+    compare(&a, &["--shard", "0/2"]);
+    compare(&b, &["--shard", "1/2"]);
+    let (a_text, b_text) = (a.display().to_string(), b.display().to_string());
+    compare(&merged, &["--merge", &a_text, "--merge", &b_text]);
+    let merged_points = std::fs::read_to_string(merged.join("points.csv")).expect("points");
+    assert_eq!(merged_points, points);
+    // The same comparison again resumes every point.
+    assert!(compare(&whole, &[]).contains("8 of 8 points"));
+    for dir in [whole, a, b, merged] {
+        std::fs::remove_dir_all(dir).ok();
+    }
+}

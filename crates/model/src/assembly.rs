@@ -8,7 +8,7 @@ use std::path::Path;
 
 use nalgebra::{Isometry3, Matrix3, Vector3};
 
-use crate::compensation::CompensationSettings;
+use crate::compensation::{CompensationSettings, IsolatorTreatment};
 use crate::dynamics;
 use crate::elements::{
     Body, Controller, Frame, FrictionContact, Isolator, Joint, JointMotion, MassBlock, PointAxis,
@@ -20,7 +20,7 @@ use crate::model::Model;
 use crate::parameter;
 use crate::robot::{JointKind, PointAxisSpec, RobotSpec};
 use crate::scenario::Scenario;
-use crate::servo::{Feedforward, Observer};
+use crate::servo::{Feedforward, Observer, VirtualBearing};
 
 /// Name of the root link.
 pub const WORLD: &str = "world";
@@ -404,9 +404,9 @@ impl<'a> Assembler<'a> {
         })
     }
 
-    /// The feedforward compensator of `[compensation]`: its model (felt
-    /// through the isolators that carry the modelled element, unless
-    /// `through_isolator = false`) and its state.
+    /// The feedforward compensator of `[compensation]`: its model, the
+    /// treatment of the isolator that carries the modelled element (dynamic
+    /// unless `isolator` says otherwise), and its states.
     fn feedforward(
         &mut self,
         settings: &CompensationSettings,
@@ -418,11 +418,17 @@ impl<'a> Assembler<'a> {
         let mut model = settings.bearing_model(robot, &scenario.file)?;
         let contact =
             (settings.element.as_ref()).and_then(|name| frictions.iter().find(|f| &f.name == name));
-        let carried = contact.and_then(|contact| self.isolator_along(contact, isolators));
-        match (settings.through_isolator, carried) {
-            (Some(true), None) => {
+        let carried = contact.and_then(|contact| {
+            let (k, c) = self.isolator_along(contact, isolators)?;
+            Some((contact, k, c))
+        });
+        let treatment = settings.isolator.unwrap_or(IsolatorTreatment::Dynamic);
+        let mut bearing = None;
+        match (treatment, carried) {
+            (IsolatorTreatment::Ignore, _) => {}
+            (_, None) if settings.isolator.is_some() => {
                 return Err(scenario.error(
-                    "compensation.through_isolator",
+                    "compensation.isolator",
                     match &settings.element {
                         Some(name) => format!(
                             "no isolator with stiffness along its sliding axis carries \"{name}\" in {}",
@@ -432,15 +438,37 @@ impl<'a> Assembler<'a> {
                     },
                 ));
             }
-            (Some(false), _) | (_, None) => {}
-            (_, Some((k_j, c_j))) => model = model.felt_through(k_j, c_j),
+            (_, None) => {}
+            (IsolatorTreatment::Static, Some((_, k_j, c_j))) => {
+                model = model.felt_through(k_j, c_j)
+            }
+            (IsolatorTreatment::Dynamic, Some((contact, k_j, c_j))) => {
+                bearing = Some(VirtualBearing {
+                    mass: self.bodies[contact.body].mass,
+                    stiffness: k_j,
+                    damping: c_j,
+                });
+            }
+        }
+        let state_index = self.names.len();
+        if bearing.is_some() {
+            self.push_state(
+                "compensation.deflection".into(),
+                StateKind::CompensatorDeflection,
+                1e-4,
+            );
+            self.push_state(
+                "compensation.bearing_velocity".into(),
+                StateKind::CompensatorVelocity,
+                1e-2,
+            );
         }
         let (kind, suffix, nominal) = model.state();
-        let state_index = self.names.len();
         self.push_state(format!("compensation.{suffix}"), kind, nominal);
         Ok(Feedforward {
             element: settings.element.clone(),
             model,
+            bearing,
             state_index,
         })
     }

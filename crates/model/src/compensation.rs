@@ -9,7 +9,8 @@
 //! error = { sigma0 = 0.5 }       # relative errors on the model: +50% sigma0
 //! # explicit model parameters instead of (or on top of) the element's:
 //! # sigma0 = 2.2e6, f_c = 5.1, ...   (dahl: sigma, f_c, exponent)
-//! through_isolator = true        # default: true when an isolator carries the element
+//! isolator = "dynamic"           # dynamic | static | ignore (default dynamic when an
+//!                                # isolator carries the element)
 //!
 //! [dob]
 //! bandwidth = 50.0               # Hz, the Q-filter's cut-off
@@ -20,8 +21,15 @@
 //! values, then the relative errors (`value * (1 + error)`). A Dahl model
 //! taken from a LuGre element starts from `sigma = sigma0`, the element's
 //! `f_c` and `exponent = 1`. When an isolator joins the element's link to the
-//! rest of the stage, the model is the friction *as felt through the
-//! isolator* (see [`crate::servo::FrictionModel::felt_through`]).
+//! rest of the stage, the compensator models the friction *as felt through
+//! the isolator*: with `isolator = "dynamic"` it simulates the bearing behind
+//! the isolator (its mass, the isolator's stiffness and damping along the
+//! contact axis, the friction model) driven by the reference, and feeds
+//! forward the isolator's pull on the table ([`crate::servo::VirtualBearing`]);
+//! with `"static"` it neglects the bearing's mass and feeds forward the
+//! friction model with its pre-motion stiffness and damping in series with
+//! the isolator's (paper Eq. 1, [`crate::servo::FrictionModel::felt_through`]);
+//! with `"ignore"` it feeds the model forward as if it acted at the table.
 
 use std::collections::BTreeMap;
 
@@ -103,9 +111,31 @@ pub struct CompensationSettings {
     pub values: BTreeMap<&'static str, f64>,
     /// Relative errors on the model, by key name: `value * (1 + error)`.
     pub error: BTreeMap<&'static str, f64>,
-    /// Whether the model is the friction as felt through the isolator that
-    /// carries the element (`None`: whenever one does).
-    pub through_isolator: Option<bool>,
+    /// How the isolator that carries the element enters the model (`None`:
+    /// dynamically whenever one does).
+    pub isolator: Option<IsolatorTreatment>,
+}
+
+/// How a compensator treats the isolator that carries the modelled element.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum IsolatorTreatment {
+    /// Simulate the bearing behind it: mass, isolator, friction.
+    Dynamic,
+    /// Series stiffness and damping, bearing mass neglected (paper Eq. 1).
+    Static,
+    /// As if the friction acted at the table.
+    Ignore,
+}
+
+impl IsolatorTreatment {
+    /// The name in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Dynamic => "dynamic",
+            Self::Static => "static",
+            Self::Ignore => "ignore",
+        }
+    }
 }
 
 /// The disturbance observer's parameters.
@@ -228,7 +258,7 @@ pub(crate) fn read_compensation(
         element: None,
         values: BTreeMap::new(),
         error: BTreeMap::new(),
-        through_isolator: None,
+        isolator: None,
     };
     for (key, value) in table {
         match (key.as_str(), value) {
@@ -237,12 +267,27 @@ pub(crate) fn read_compensation(
                 return Err(at(key, "is empty: name a friction element".into()));
             }
             ("element", toml::Value::String(name)) => settings.element = Some(name.clone()),
-            ("through_isolator", toml::Value::Boolean(b)) => settings.through_isolator = Some(*b),
-            ("element" | "through_isolator", other) => {
+            ("isolator", toml::Value::String(name)) => {
+                let treatment = [
+                    IsolatorTreatment::Dynamic,
+                    IsolatorTreatment::Static,
+                    IsolatorTreatment::Ignore,
+                ]
+                .into_iter()
+                .find(|t| t.name() == name)
+                .ok_or_else(|| {
+                    at(
+                        key,
+                        format!("unknown treatment \"{name}\" (dynamic, static or ignore)"),
+                    )
+                })?;
+                settings.isolator = Some(treatment);
+            }
+            ("element" | "isolator", other) => {
                 let wanted = if key == "element" {
                     "a string"
                 } else {
-                    "true or false"
+                    "\"dynamic\", \"static\" or \"ignore\""
                 };
                 return Err(at(
                     key,
@@ -283,7 +328,7 @@ pub(crate) fn read_compensation(
                     at(
                         name,
                         format!(
-                            "unknown key (kind, element, error, through_isolator, or a {} parameter: {})",
+                            "unknown key (kind, element, error, isolator, or a {} parameter: {})",
                             kind.name(),
                             kind.names()
                         ),

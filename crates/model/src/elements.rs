@@ -225,6 +225,10 @@ pub enum StateKind {
     CompensatorBristle,
     /// Friction force of a feedforward compensator's Dahl model, N.
     CompensatorForce,
+    /// Isolator deflection of a feedforward compensator's virtual bearing, m.
+    CompensatorDeflection,
+    /// Velocity of a feedforward compensator's virtual bearing, m/s.
+    CompensatorVelocity,
     /// State of a disturbance observer (estimate less its velocity term), N.
     ObserverState,
 }
@@ -240,7 +244,8 @@ impl StateKind {
             Self::AngularVelocity => "rad/s",
             Self::Bristle => "m",
             Self::ErrorIntegral => "m s",
-            Self::CompensatorBristle => "m",
+            Self::CompensatorBristle | Self::CompensatorDeflection => "m",
+            Self::CompensatorVelocity => "m/s",
             Self::CompensatorForce | Self::ObserverState => "N",
         }
     }

@@ -84,6 +84,17 @@ impl Model {
                 x[friction.z_index] = friction.lugre.steady_state_z(-inputs.platform_velocity);
             }
         }
+        // The feedforward compensator's states are driven by the reference
+        // alone: with the reference at rest and the counter-surface still
+        // they rest where they start; otherwise they balance like the rest,
+        // except a state whose rate depends on no unknown (a model driven by
+        // a reference at rest), which rests too.
+        let compensator: Vec<usize> = self.feedforward_states().map_or(Vec::new(), |states| {
+            let tangent = self.tangent(&x);
+            states
+                .filter_map(|i| tangent_index(&tangent, &self.structure.layout.names[i]))
+                .collect()
+        });
         let mut ws = self.workspace();
         let mut f = vec![0.0; self.n_states()];
         let mut last_step = f64::INFINITY;
@@ -104,6 +115,18 @@ impl Model {
             let mut system = DMatrix::zeros(unknowns.len(), unknowns.len());
             let mut residual = DVector::zeros(unknowns.len());
             for (row, equation) in (np..n).enumerate() {
+                let held = compensator.contains(&equation)
+                    && (kind == EquilibriumKind::Sticking
+                        || row_is_zero(&jacobian, equation, &unknowns));
+                if held {
+                    // The compensator's state rests where it starts: x - x_0 = 0.
+                    let state = self.structure.layout.index(&tangent.names[equation]);
+                    residual[row] = state.map_or(0.0, |i| x[i] - start[i]);
+                    for (col, &unknown) in unknowns.iter().enumerate() {
+                        system[(row, col)] = if unknown == equation { 1.0 } else { 0.0 };
+                    }
+                    continue;
+                }
                 let sticking_contact = if kind == EquilibriumKind::Sticking {
                     self.structure.frictions.iter().position(|fr| {
                         tangent_index(&tangent, &self.structure.layout.names[fr.z_index])
@@ -161,6 +184,19 @@ impl Model {
             step: last_step,
         })
     }
+}
+
+impl Model {
+    /// The states of the feedforward compensator, if the servo has one.
+    fn feedforward_states(&self) -> Option<std::ops::Range<usize>> {
+        let feedforward = self.structure.controller.as_ref()?.feedforward.as_ref()?;
+        Some(feedforward.state_index..feedforward.state_index + feedforward.n_states())
+    }
+}
+
+/// Whether the rate of tangent coordinate `equation` depends on no unknown.
+fn row_is_zero(jacobian: &DMatrix<f64>, equation: usize, unknowns: &[usize]) -> bool {
+    unknowns.iter().all(|&u| jacobian[(equation, u)] == 0.0)
 }
 
 /// The name of the unknown that dominates the null direction of a singular

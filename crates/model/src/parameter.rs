@@ -720,17 +720,39 @@ fn element_target(name: &str, key: &str, robot: &RobotSpec) -> Result<Target, (S
 mod tests {
     use super::*;
 
-    fn fig05b() -> (Scenario, RobotSpec) {
+    fn paper(name: &str) -> (Scenario, RobotSpec) {
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/paper");
-        let scenario = Scenario::from_file(&dir.join("fig05b_fi.toml")).expect("scenario");
+        let scenario = Scenario::from_file(&dir.join(name)).expect("scenario");
         let robot = RobotSpec::from_file(&scenario.robot).expect("robot");
         (scenario, robot)
     }
 
-    /// Every entry reads back what was written, and refuses what its rule refuses.
+    fn fig05b() -> (Scenario, RobotSpec) {
+        paper("fig05b_fi.toml")
+    }
+
+    /// Every entry reads back what was written, and refuses what its rule
+    /// refuses, on a plain study and on compensated ones (feedforward models,
+    /// their errors, the observer, the reference's numbers).
     #[test]
     fn every_entry_round_trips_and_checks_its_rule() {
-        let (scenario, robot) = fig05b();
+        for name in ["fig05b_fi.toml", "fig03a_ff_fi.toml", "fig03b_dob_fi.toml"] {
+            round_trips(paper(name));
+        }
+        let (scenario, robot) = paper("fig03a_ff_fi.toml");
+        let paths: Vec<String> = (Parameter::all(&scenario, &robot).iter())
+            .map(|p| p.path().to_string())
+            .collect();
+        for path in [
+            "compensation.sigma",
+            "compensation.error.f_c",
+            "reference.tangential_velocity",
+        ] {
+            assert!(paths.iter().any(|p| p == path), "{path} in {paths:?}");
+        }
+    }
+
+    fn round_trips((scenario, robot): (Scenario, RobotSpec)) {
         let all = Parameter::all(&scenario, &robot);
         assert!(all.len() > 20, "{} entries", all.len());
         for parameter in &all {

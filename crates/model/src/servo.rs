@@ -9,6 +9,10 @@
 //! f_ff = friction model driven by x_r', with its own state w:
 //!        LuGre: w = z_c,  (f_ff, z_c') = LuGre(x_r', z_c)
 //!        Dahl:  w = f_ff, f_ff' = Dahl(x_r', f_ff)
+//!      or, through an isolator simulated dynamically (a virtual bearing of
+//!      mass m_b on the isolator k_j, c_j, sliding at v_b with friction f(v_b - x_p', w)):
+//!        d = x_r - x_b,  d' = x_r' - v_b,  m_b v_b' = k_j d + c_j d' - f,
+//!        f_ff = k_j d + c_j d'   (the isolator's pull on the table)
 //! d_hat = Q(s) (m_n s x' - f),  Q(s) = omega / (s + omega),  omega = 2 pi bandwidth
 //! ```
 //!
@@ -139,15 +143,63 @@ impl FrictionModel {
 }
 
 /// Feedforward friction compensation: a friction model driven by the
-/// reference velocity, simulated with its own state.
+/// reference, simulated with its own state.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Feedforward {
     /// The name of the friction element it models, when it models one.
     pub element: Option<String>,
-    /// The model simulated (as felt at the servo, after any isolator).
+    /// The friction model simulated (already felt through the isolator when
+    /// the isolator is treated statically).
     pub model: FrictionModel,
-    /// Index of the model's state in the state vector.
+    /// The bearing behind the isolator, when it is simulated dynamically.
+    pub bearing: Option<VirtualBearing>,
+    /// Index of the compensator's first state: the model's state, or with a
+    /// virtual bearing the isolator deflection, then the bearing velocity,
+    /// then the model's state.
     pub state_index: usize,
+}
+
+/// The bearing a compensator simulates behind an isolator: its mass and the
+/// isolator's stiffness and damping along the contact axis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VirtualBearing {
+    /// Bearing mass m_b, kg.
+    pub mass: f64,
+    /// Isolator stiffness k_j along the contact axis, N/m.
+    pub stiffness: f64,
+    /// Isolator damping c_j along the contact axis, N s/m.
+    pub damping: f64,
+}
+
+impl Feedforward {
+    /// Number of states it has.
+    pub fn n_states(&self) -> usize {
+        if self.bearing.is_some() { 3 } else { 1 }
+    }
+
+    /// Its force and the rates of its states (unused entries zero).
+    #[inline(always)]
+    fn force_and_rates<S: Scalar>(&self, x: &[S], inputs: &InputValues<S>) -> (S, [S; 3]) {
+        let i = self.state_index;
+        let v_r = inputs.reference_velocity;
+        match &self.bearing {
+            None => {
+                let (force, rate) = self.model.force_and_rate(v_r, x[i]);
+                (force, [rate, S::zero(), S::zero()])
+            }
+            Some(bearing) => {
+                let (deflection, velocity, w) = (x[i], x[i + 1], x[i + 2]);
+                let deflection_rate = v_r - velocity;
+                let (friction, w_rate) = self
+                    .model
+                    .force_and_rate(velocity - inputs.platform_velocity, w);
+                let pull = S::constant(bearing.stiffness) * deflection
+                    + S::constant(bearing.damping) * deflection_rate;
+                let acceleration = (pull - friction) * S::constant(1.0 / bearing.mass);
+                (pull, [deflection_rate, acceleration, w_rate])
+            }
+        }
+    }
 }
 
 /// A disturbance observer with a first-order Q-filter.
@@ -172,8 +224,8 @@ pub struct ServoValues<S> {
     pub feedforward: S,
     /// Disturbance estimate d_hat, N.
     pub estimate: S,
-    /// Rates of the integral, the feedforward state and the observer state.
-    rates: [S; 3],
+    /// Rates of the integral, the feedforward states and the observer state.
+    rates: [S; 5],
 }
 
 impl<S: Scalar> ServoValues<S> {
@@ -183,17 +235,24 @@ impl<S: Scalar> ServoValues<S> {
             error: S::zero(),
             feedforward: S::zero(),
             estimate: S::zero(),
-            rates: [S::zero(); 3],
+            rates: [S::zero(); 5],
         }
     }
 }
 
 impl Controller {
     /// The servo's own states in the order of [`ServoValues`]'s rates.
-    fn state_slots(&self) -> [Option<usize>; 3] {
+    fn state_slots(&self) -> [Option<usize>; 5] {
+        let feedforward = |k: usize| {
+            (self.feedforward.as_ref())
+                .filter(|f| k < f.n_states())
+                .map(|f| f.state_index + k)
+        };
         [
             self.integral_index,
-            self.feedforward.as_ref().map(|f| f.state_index),
+            feedforward(0),
+            feedforward(1),
+            feedforward(2),
             self.observer.as_ref().map(|o| o.state_index),
         ]
     }
@@ -218,11 +277,9 @@ impl Controller {
             + S::constant(self.c) * error_rate
             + S::constant(self.k_i) * integral);
         if let Some(feedforward) = &self.feedforward {
-            let (force, rate) = feedforward
-                .model
-                .force_and_rate(inputs.reference_velocity, x[feedforward.state_index]);
+            let (force, rates) = feedforward.force_and_rates(x, inputs);
             values.feedforward = force;
-            values.rates[1] = rate;
+            values.rates[1..4].copy_from_slice(&rates);
             command += force;
         }
         let mut force = command;
@@ -231,7 +288,7 @@ impl Controller {
             let estimate =
                 x[observer.state_index] + cutoff * S::constant(observer.nominal_mass) * velocity;
             values.estimate = estimate;
-            values.rates[2] = -cutoff * command;
+            values.rates[4] = -cutoff * command;
             force = command - estimate;
         }
         (force, values)

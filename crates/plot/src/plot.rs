@@ -2,7 +2,7 @@
 //! stacked figures and the x-y plots.
 
 use plotters::coord::Shift;
-use plotters::prelude::{DrawingArea, DrawingBackend};
+use plotters::prelude::{Color, DrawingArea, DrawingBackend, Polygon};
 
 use crate::chart::{self, Frame};
 use crate::error::DrawResult;
@@ -24,6 +24,13 @@ pub(crate) fn draw_curves<DB: DrawingBackend>(
     let mut chart = chart::build(area, frame)?;
     chart::draw_grid(&mut chart, frame)?;
     let map = chart::pixel_map(&chart, frame);
+    for (i, s) in series.iter().enumerate() {
+        let outline = s.band_outline(frame.x.scale, frame.y.scale);
+        if outline.len() >= 3 {
+            let shade = series_colour(i).mix(0.2).filled();
+            chart.draw_series(std::iter::once(Polygon::new(outline, shade)))?;
+        }
+    }
     let layers = prepare_all(series, (frame.x.scale, frame.y.scale), &map, series_colour);
     for layer in &layers {
         layer.draw(&mut chart, false, format)?;

@@ -43,6 +43,9 @@ pub struct Series {
     pub y: Vec<f64>,
     /// How the series is drawn.
     pub style: SeriesStyle,
+    /// A shaded band around the curve, (lower, upper) at each x (a +-1 sigma
+    /// spread, say); both must have as many values as `x`.
+    pub band: Option<(Vec<f64>, Vec<f64>)>,
 }
 
 impl Series {
@@ -58,6 +61,15 @@ impl Series {
             x: x.into(),
             y: y.into(),
             style,
+            band: None,
+        }
+    }
+
+    /// The same series with a shaded band from `lower` to `upper`.
+    pub fn with_band(self, lower: impl Into<Vec<f64>>, upper: impl Into<Vec<f64>>) -> Self {
+        Self {
+            band: Some((lower.into(), upper.into())),
+            ..self
         }
     }
 
@@ -86,15 +98,43 @@ impl Series {
 
     /// Fails with [`PlotError::LengthMismatch`] when `x` and `y` differ in length.
     pub(crate) fn check_lengths(&self, path: &Path) -> Result<(), PlotError> {
-        if self.x.len() == self.y.len() {
-            return Ok(());
+        let band = self
+            .band
+            .iter()
+            .flat_map(|(low, high)| [low.len(), high.len()]);
+        match std::iter::once(self.y.len())
+            .chain(band)
+            .find(|&n| n != self.x.len())
+        {
+            None => Ok(()),
+            Some(y_len) => Err(PlotError::LengthMismatch {
+                path: path.to_path_buf(),
+                label: self.label.clone(),
+                x_len: self.x.len(),
+                y_len,
+            }),
         }
-        Err(PlotError::LengthMismatch {
-            path: path.to_path_buf(),
-            label: self.label.clone(),
-            x_len: self.x.len(),
-            y_len: self.y.len(),
-        })
+    }
+
+    /// The band's outline in axis space (upper edge left to right, lower edge
+    /// back), skipping x values where either edge cannot be drawn.
+    pub(crate) fn band_outline(&self, x: Scale, y: Scale) -> Vec<Point> {
+        let Some((low, high)) = &self.band else {
+            return Vec::new();
+        };
+        let edge = |values: &[f64]| -> Vec<(usize, Point)> {
+            (self.x.iter().zip(values).enumerate())
+                .filter_map(|(i, (&px, &py))| Some((i, (x.to_axis(px)?, y.to_axis(py)?))))
+                .collect()
+        };
+        let (upper, lower) = (edge(high), edge(low));
+        let both =
+            |i: &usize| upper.iter().any(|(j, _)| j == i) && lower.iter().any(|(j, _)| j == i);
+        let mut outline: Vec<Point> = (upper.iter().filter(|(i, _)| both(i)))
+            .map(|(_, p)| *p)
+            .collect();
+        outline.extend((lower.iter().rev().filter(|(i, _)| both(i))).map(|(_, p)| *p));
+        outline
     }
 
     /// The points in axis space for the given scales; undrawable coordinates become NaN.
@@ -112,10 +152,17 @@ impl Series {
     }
 
     /// The drawable points in axis space (both coordinates valid).
+    /// The band's edges count too, so that ranges fitted to these points hold it.
     pub(crate) fn valid_points(&self, x: Scale, y: Scale) -> impl Iterator<Item = Point> + '_ {
+        let band = self
+            .band
+            .iter()
+            .flat_map(|(low, high)| low.iter().chain(high));
+        let band_x = self.band.iter().flat_map(|_| self.x.iter().chain(&self.x));
         self.x
             .iter()
             .zip(&self.y)
+            .chain(band_x.zip(band))
             .filter_map(move |(&px, &py)| Some((x.to_axis(px)?, y.to_axis(py)?)))
     }
 }

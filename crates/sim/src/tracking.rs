@@ -2,8 +2,9 @@
 //! tracking error over the statistics window; the peak error around each
 //! velocity reversal of the reference (the quadrant glitch of a circle test);
 //! and, for a staircase reference, the settling time of each step: from the
-//! start of the move until the error enters the band of +-`settle_window`
-//! around zero for good (until the next move). Each list comes with its mean
+//! end of the move (when the reference comes to rest) until the error enters
+//! the band of +-`settle_window` around zero for good (until the next move);
+//! 0 when it is inside by the time the move ends. Each list comes with its mean
 //! and standard deviation.
 
 use fistage_model::reference::Reference;
@@ -154,7 +155,9 @@ fn settling(reference: &Reference, times: &[f64], error: &[f64], band: f64) -> O
         if next > end + 1e-12 {
             break;
         }
-        // The last sample of the step outside the band; settled at the sample after it.
+        // The last sample of the step outside the band; settled at the
+        // sample after it, counted from the end of the move.
+        let arrival = begin + move_time;
         let samples: Vec<(f64, f64)> = times
             .iter()
             .zip(error)
@@ -163,7 +166,9 @@ fn settling(reference: &Reference, times: &[f64], error: &[f64], band: f64) -> O
             .collect();
         match samples.iter().rposition(|(_, e)| e.abs() > band) {
             None => settled.push(0.0),
-            Some(i) if i + 1 < samples.len() => settled.push(samples[i + 1].0 - begin),
+            Some(i) if i + 1 < samples.len() => {
+                settled.push((samples[i + 1].0 - arrival).max(0.0));
+            }
             Some(_) => unsettled += 1,
         }
     }
@@ -221,7 +226,8 @@ mod tests {
     }
 
     /// Settling times of a staircase: an error decaying as e^{-t/tau} from
-    /// each move start settles into the band at tau ln(e0 / band).
+    /// each move start enters the band at tau ln(e0 / band), which is that
+    /// time less the move time after the move's end (0 when sooner).
     #[test]
     fn staircase_steps_settle_when_the_error_stays_in_the_band() {
         let stairs = Reference::Staircase {
@@ -251,7 +257,7 @@ mod tests {
             "tau = 1 s never settles within 0.3 s"
         );
         for (k, t) in settling.times.values.iter().enumerate() {
-            let expected = tau[k] * (1e-6f64 / 5e-8).ln();
+            let expected = (tau[k] * (1e-6f64 / 5e-8).ln() - 0.05).max(0.0);
             assert!(
                 (t - expected).abs() <= 1.5e-4,
                 "step {k}: {t} vs {expected}"

@@ -1,0 +1,389 @@
+//! `fistage compare CASE... [--baseline FILE] [--metric NAME] [--out DIR]`:
+//! tracking of several scenarios over the `[sweep]` grid of the first,
+//! against an optional baseline (the paper's Fig. 3 studies). Writes
+//! `points.csv` (a row per case and point: `case`, a column per axis, then
+//! `rms_error`, `peak_error`, `peak_error_std`, `settling_time`,
+//! `settling_time_std`, `unsettled_steps`), `curves.csv` and `summary.json`
+//! (per case and first-axis value: the metric's mean and spread, the
+//! reduction against the baseline in percent), and plots of both. Journal,
+//! resume, shards and merge follow [`crate::study`].
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, bail};
+use fistage_analysis::compare::{Case, CompareRow, Comparison, Curve, Metric};
+use fistage_analysis::sweep::{Spacing, SweepSpec};
+use fistage_model::RobotSpec;
+use fistage_plot::{Series, XyPlot, write_xy};
+
+use crate::provenance::Provenance;
+use crate::study::{self, Study, StudyArgs};
+
+/// Arguments of `fistage compare`.
+#[derive(clap::Args)]
+pub struct CompareArgs {
+    /// Scenario files, one per case; the first one's [sweep] axes are the grid.
+    #[arg(required = true)]
+    pub cases: Vec<PathBuf>,
+    /// The scenario every case is compared with (run on the axes it has).
+    #[arg(long)]
+    pub baseline: Option<PathBuf>,
+    /// What the curves show: peak_error (the reversal peak, default for
+    /// circles and other references), settling_time (default for
+    /// staircases) or rms_error.
+    #[arg(long)]
+    pub metric: Option<String>,
+    /// Output folder (default: out/<first case>-compare).
+    #[arg(long, short)]
+    pub out: Option<PathBuf>,
+    /// Shards, merging, threads, resume.
+    #[command(flatten)]
+    pub study: StudyArgs,
+}
+
+impl Study for Comparison {
+    type Row = CompareRow;
+    const TABLE: &'static str = "points.csv";
+    const ITEMS: &'static str = "points";
+    fn len(&self) -> usize {
+        Comparison::len(self)
+    }
+    fn header(&self) -> String {
+        Comparison::header(self)
+    }
+    fn row(&self, row: &CompareRow) -> String {
+        Comparison::row(self, row)
+    }
+    fn index(row: &CompareRow) -> usize {
+        row.index
+    }
+    fn read_rows(&self, path: &Path) -> Vec<CompareRow> {
+        Comparison::read_rows(self, path)
+    }
+    fn compute(
+        &self,
+        indices: &[usize],
+        threads: usize,
+        done: &(dyn Fn(&CompareRow, usize) + Sync),
+    ) -> Vec<CompareRow> {
+        self.run(indices, threads, done)
+    }
+}
+
+/// The case of a scenario file.
+fn case_of(
+    path: &Path,
+    grid: &[fistage_analysis::sweep::Axis],
+    baseline: bool,
+) -> anyhow::Result<Case> {
+    let loaded = fistage_model::load(path)?;
+    let robot_file = RobotSpec::from_file(&loaded.scenario.robot)?;
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().replace(',', "_"))
+        .unwrap_or_default();
+    Ok(Case::new(name, loaded, robot_file, grid, baseline)?)
+}
+
+/// Runs the command.
+pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
+    let first = fistage_model::load(&args.cases[0])?;
+    let axes = match first.scenario.sweep {
+        Some(_) => {
+            let spec = SweepSpec::from_scenario(&first.scenario)?;
+            let robot_file = RobotSpec::from_file(&first.scenario.robot)?;
+            spec.check_against(&first.scenario, &robot_file)?;
+            spec.axes
+        }
+        None => Vec::new(),
+    };
+    let mut cases = Vec::new();
+    if let Some(baseline) = &args.baseline {
+        cases.push(case_of(baseline, &axes, true)?);
+    }
+    for path in &args.cases {
+        cases.push(case_of(path, &axes, false)?);
+    }
+    for (i, case) in cases.iter().enumerate() {
+        if let Some(other) = cases[..i].iter().find(|c| c.name == case.name) {
+            bail!(
+                "two cases are named \"{}\" (cases are named by their file names): rename one file",
+                other.name
+            );
+        }
+        if case.loaded.scenario.controller.is_none() {
+            bail!(
+                "{}: has no [controller], so it tracks nothing to compare",
+                case.loaded.scenario.file.display()
+            );
+        }
+    }
+    let metric = match &args.metric {
+        Some(name) => Metric::from_name(name).with_context(|| {
+            format!("--metric must be peak_error, settling_time or rms_error, got \"{name}\"")
+        })?,
+        None => Metric::for_reference(&first.scenario.reference),
+    };
+    let comparison = Comparison {
+        axes,
+        cases,
+        has_baseline: args.baseline.is_some(),
+        metric,
+    };
+    let out_dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| crate::output::default_folder(&args.cases[0], "compare"));
+    let mut provenance = Provenance::of_study(
+        "compare",
+        &first.scenario.file,
+        &first.scenario.robot,
+        &format!("{:?}", comparison.axes),
+        &format!("metric {}", metric.name()),
+        args.study.shard()?,
+    )?;
+    for case in &comparison.cases {
+        provenance = provenance
+            .with_file(
+                &format!("case {} scenario", case.name),
+                &case.loaded.scenario.file,
+            )?
+            .with_file(
+                &format!("case {} robot", case.name),
+                &case.loaded.scenario.robot,
+            )?;
+    }
+    let (folder, rows) = study::gather(&comparison, &args.study, &out_dir, &provenance)?;
+    study::write_table(&comparison, &rows, &folder)?;
+    let curves = comparison.curves(&rows);
+    write_curves(&comparison, &curves, folder.path())?;
+    let pictures = draw(&comparison, &curves, folder.path())?;
+    folder.commit()?;
+    report(&comparison, &rows, &curves, &out_dir, &pictures);
+    Ok(())
+}
+
+/// The first axis's name for tables.
+fn x_label(comparison: &Comparison) -> String {
+    comparison
+        .axes
+        .first()
+        .map_or("case".into(), |a| a.parameter.clone())
+}
+
+/// The first axis's name and unit for plots.
+fn x_label_with_unit(comparison: &Comparison) -> String {
+    let case = &comparison.cases[comparison.cases.len() - 1];
+    let unit = comparison.axes.first().and_then(|a| {
+        fistage_model::Parameter::resolve(&a.parameter, &case.loaded.scenario, &case.robot_file)
+            .ok()
+            .map(|p| p.unit())
+    });
+    match unit {
+        Some(unit) => format!("{} [{unit}]", x_label(comparison)),
+        None => x_label(comparison),
+    }
+}
+
+fn write_curves(comparison: &Comparison, curves: &[Curve], out_dir: &Path) -> anyhow::Result<()> {
+    let metric = comparison.metric.name();
+    let mut text = format!(
+        "case,{},{metric}_mean,{metric}_std,reduction_percent_mean,reduction_percent_std,points,missing\n",
+        x_label(comparison)
+    );
+    let number = |v: f64| {
+        if v.is_finite() {
+            format!("{v:e}")
+        } else {
+            String::new()
+        }
+    };
+    let mut json = Vec::new();
+    for curve in curves {
+        let name = &comparison.cases[curve.case].name;
+        for i in 0..curve.x.len() {
+            let reduction = |v: &[f64]| v.get(i).copied().unwrap_or(f64::NAN);
+            text.push_str(&format!(
+                "{name},{},{},{},{},{},{},{}\n",
+                number(curve.x[i]),
+                number(curve.mean[i]),
+                number(curve.std[i]),
+                number(reduction(&curve.reduction_mean)),
+                number(reduction(&curve.reduction_std)),
+                curve.points[i],
+                curve.missing[i]
+            ));
+        }
+        let finite = |v: &[f64]| -> Vec<Option<f64>> {
+            v.iter().map(|x| x.is_finite().then_some(*x)).collect()
+        };
+        json.push(serde_json::json!({
+            "case": name,
+            "title": comparison.cases[curve.case].loaded.scenario.title,
+            "x": finite(&curve.x),
+            "mean": finite(&curve.mean),
+            "std": finite(&curve.std),
+            "reduction_percent_mean": finite(&curve.reduction_mean),
+            "reduction_percent_std": finite(&curve.reduction_std),
+            "points": curve.points,
+            "missing": curve.missing,
+        }));
+    }
+    let path = out_dir.join("curves.csv");
+    std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?;
+    let summary = serde_json::json!({
+        "metric": metric,
+        "unit": comparison.metric.unit(),
+        "x": x_label(comparison),
+        "baseline": comparison.has_baseline.then(|| comparison.cases[0].name.clone()),
+        "curves": json,
+    });
+    let path = out_dir.join("summary.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&summary)? + "\n")
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(())
+}
+
+/// A legend label: the case's title, or its name.
+fn label(comparison: &Comparison, case: usize) -> String {
+    let case = &comparison.cases[case];
+    if case.loaded.scenario.title.is_empty() {
+        case.name.clone()
+    } else {
+        crate::figures::figure_title(&case.loaded)
+    }
+}
+
+fn draw(comparison: &Comparison, curves: &[Curve], out_dir: &Path) -> anyhow::Result<Vec<String>> {
+    let x_log = comparison
+        .axes
+        .first()
+        .is_some_and(|a| a.spacing == Spacing::Log);
+    let band = |mean: &[f64], std: &[f64], sign: f64| -> Vec<f64> {
+        mean.iter().zip(std).map(|(m, s)| m + sign * s).collect()
+    };
+    let spread = if comparison.axes.len() >= 2 {
+        format!("mean, +-1 sigma over {}", comparison.axes[1].parameter)
+    } else {
+        "mean, +-1 sigma over the run's events".into()
+    };
+    let metric = comparison.metric;
+    let mut plots = vec![(
+        format!("{}.svg", metric.name()),
+        XyPlot {
+            x_log,
+            ..XyPlot::new(
+                metric.name().replace('_', " "),
+                x_label_with_unit(comparison),
+                format!("{} [{}] ({spread})", metric.name(), metric.unit()),
+                curves
+                    .iter()
+                    .map(|c| {
+                        Series::line_and_markers(
+                            label(comparison, c.case),
+                            c.x.clone(),
+                            c.mean.clone(),
+                        )
+                        .with_band(band(&c.mean, &c.std, -1.0), band(&c.mean, &c.std, 1.0))
+                    })
+                    .collect(),
+            )
+        },
+    )];
+    if comparison.has_baseline {
+        plots.push((
+            format!("{}_reduction.svg", metric.name()),
+            XyPlot {
+                x_log,
+                ..XyPlot::new(
+                    format!(
+                        "{} reduction against {}",
+                        metric.name().replace('_', " "),
+                        comparison.cases[0].name
+                    ),
+                    x_label_with_unit(comparison),
+                    format!("reduction [%] ({spread})"),
+                    curves
+                        .iter()
+                        .skip(1)
+                        .map(|c| {
+                            let (m, s) = (&c.reduction_mean, &c.reduction_std);
+                            Series::line_and_markers(
+                                label(comparison, c.case),
+                                c.x.clone(),
+                                m.clone(),
+                            )
+                            .with_band(band(m, s, -1.0), band(m, s, 1.0))
+                        })
+                        .collect(),
+                )
+            },
+        ));
+    }
+    let mut written = Vec::new();
+    for (name, plot) in plots {
+        for file in [name.clone(), name.replace(".svg", ".png")] {
+            write_xy(&plot, &out_dir.join(&file))?;
+        }
+        written.push(name);
+    }
+    Ok(written)
+}
+
+fn report(
+    comparison: &Comparison,
+    rows: &[CompareRow],
+    curves: &[Curve],
+    out_dir: &Path,
+    pictures: &[String],
+) {
+    let failed: Vec<&CompareRow> = rows.iter().filter(|r| r.metrics.is_none()).collect();
+    println!(
+        "{} of {} points in {}/points.csv, curves in curves.csv, plots {}",
+        rows.len(),
+        comparison.len(),
+        out_dir.display(),
+        pictures.join(", ")
+    );
+    for row in failed.iter().take(5) {
+        println!(
+            "  {} at {:?}: no metrics ({})",
+            comparison.cases[row.case].name,
+            row.values,
+            row.failure.as_deref().unwrap_or("not computed")
+        );
+    }
+    let metric = comparison.metric;
+    for curve in curves {
+        let is_baseline = comparison.has_baseline && curve.case == 0;
+        println!(
+            "{}{}:",
+            comparison.cases[curve.case].name,
+            if is_baseline { " (baseline)" } else { "" }
+        );
+        for i in 0..curve.x.len() {
+            let reduction = (curve.reduction_mean.get(i))
+                .filter(|_| !is_baseline)
+                .map(|r| format!(", reduction {r:.1} +- {:.1} %", curve.reduction_std[i]))
+                .unwrap_or_default();
+            let missing = if curve.missing[i] > 0 {
+                format!(
+                    " ({} of {} points without a value)",
+                    curve.missing[i],
+                    curve.missing[i] + curve.points[i]
+                )
+            } else {
+                String::new()
+            };
+            println!(
+                "  {} = {:.4e}: {} {:.4e} +- {:.2e} {}{reduction}{missing}",
+                x_label(comparison),
+                curve.x[i],
+                metric.name(),
+                curve.mean[i],
+                curve.std[i],
+                metric.unit()
+            );
+        }
+    }
+}
