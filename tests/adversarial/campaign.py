@@ -892,7 +892,10 @@ def scenario_expect(table, key, kind):
 def gen_scenario(quick):
     cat = "scenario"
     values = QUICK_TOML_VALUES if quick else TOML_VALUES
-    bases = [("fig05b_fi", fig05b())]
+    compensated = fig05b() + (
+        '\n[compensation]\nkind = "lugre"\nelement = "bearing_friction"\nerror = { sigma0 = 0.5 }\n'
+        'isolator = "dynamic"\n[dob]\nbandwidth = 50.0\nnominal_mass = 1.5\n')
+    bases = [("fig05b_fi", fig05b()), ("fig05b_compensated", compensated)]
     if not quick:
         bases.append(("symmetric_traverse", traverse()))
     for bname, base in bases:

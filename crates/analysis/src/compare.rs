@@ -168,7 +168,8 @@ pub struct Curve {
     /// Mean reduction against the baseline, percent (empty without one; NaN
     /// for the baseline itself and where the baseline's metric is 0 or missing).
     pub reduction_mean: Vec<f64>,
-    /// Its standard deviation, percent.
+    /// Its standard deviation over the second axis, percent (NaN for a
+    /// case without one).
     pub reduction_std: Vec<f64>,
     /// Points behind each value that gave the metric.
     pub points: Vec<usize>,
@@ -450,7 +451,10 @@ impl Comparison {
                     if self.has_baseline {
                         let (mean, std) = mean_std(&reduction);
                         curve.reduction_mean.push(mean);
-                        curve.reduction_std.push(std);
+                        // One run per value: no spread over a second axis.
+                        curve
+                            .reduction_std
+                            .push(if over_second { std } else { f64::NAN });
                     }
                     curve.points.push(metric.len());
                     curve.missing.push(missing);

@@ -5,7 +5,9 @@
 //! each mode's kinetic energy is shared between the table's six motions and
 //! the bearings; sweeps of stability over one or two parameters; and
 //! tolerance analyses of populations of stages with servo-gain design
-//! ([`robust`], [`robust::tune`]), both judged point by point by [`assess`]. [`lab`]
+//! ([`robust`], [`robust::tune`]), both judged point by point by [`assess`];
+//! comparisons of several scenarios' tracking over a grid against a
+//! baseline ([`compare`], the paper's Fig. 3 studies). [`lab`]
 //! measures identification data (f_ss(v), the pre-motion FRF) on the simulated
 //! stage, as a lab would, for fistage-ident to fit.
 //!

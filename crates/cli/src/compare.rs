@@ -160,6 +160,14 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
     let pictures = draw(&comparison, &curves, folder.path())?;
     folder.commit()?;
     report(&comparison, &rows, &curves, &out_dir, &pictures);
+    let missing: usize = curves.iter().flat_map(|c| &c.missing).sum();
+    if missing > 0 {
+        bail!(
+            "{missing} of {} points gave no {} (a failed run, no velocity reversal, or a step that never settled): the curve values they belong to are left empty",
+            rows.len(),
+            comparison.metric.name()
+        );
+    }
     Ok(())
 }
 
@@ -364,7 +372,11 @@ fn report(
         for i in 0..curve.x.len() {
             let reduction = (curve.reduction_mean.get(i))
                 .filter(|_| !is_baseline)
-                .map(|r| format!(", reduction {r:.1} +- {:.1} %", curve.reduction_std[i]))
+                .map(|r| match curve.reduction_std[i] {
+                    s if s.is_finite() => format!(", reduction {r:.1} +- {s:.1} %"),
+                    _ if r.is_finite() => format!(", reduction {r:.1} %"),
+                    _ => ", no reduction (baseline 0 or missing)".into(),
+                })
                 .unwrap_or_default();
             let missing = if curve.missing[i] > 0 {
                 format!(

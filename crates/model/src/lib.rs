@@ -17,6 +17,12 @@
 //!   per-thread [`Workspace`]; the evaluation is chosen once, when the model
 //!   is built, from its structure ([`EvaluationPath`]), and the exact
 //!   Jacobian ([`Model::jacobian`]) differentiates that same code.
+//! - **The servo.** A PID on a sensor and an actuator, with optional
+//!   feedforward friction compensation (a LuGre or Dahl model driven by the
+//!   reference, simulated with its own states, through a simulated bearing
+//!   when an isolator carries the modelled element: [`compensation`],
+//!   [`servo`]) and a disturbance observer; one law serves every
+//!   evaluation path.
 //! - **Equilibria.** [`Model::equilibrium`] finds the sticking or slipping
 //!   equilibrium by Newton's method with the exact Jacobian.
 //!
