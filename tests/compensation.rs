@@ -318,8 +318,8 @@ fn compensation_keys_are_checked() {
     let cases = [
         ("[compensation]\nkind = \"coulomb\"\n", "compensation.kind"),
         (
-            "[compensation]\nkind = \"dahl\"\nsigma0 = 1e6\n",
-            "compensation.sigma0",
+            "[compensation]\nkind = \"dahl\"\nsigma1 = 237.0\n",
+            "compensation.sigma1",
         ),
         (
             "[compensation]\nkind = \"lugre\"\nerror = { sigma = 0.1 }\n",
@@ -346,8 +346,8 @@ fn compensation_keys_are_checked() {
             "compensation.isolator",
         ),
         (
-            "[compensation]\nkind = \"none\"\nelement = \"bearing_friction\"\n",
-            "compensation.element",
+            "[compensation]\nkind = \"none\"\nelements = \"bearing_friction\"\n",
+            "compensation.elements",
         ),
         ("[dob]\nbandwidth = 50.0\n", "dob.nominal_mass"),
         (
@@ -363,10 +363,13 @@ fn compensation_keys_are_checked() {
         let text = message(extra);
         assert!(text.contains(key), "{extra}: {text}");
     }
-    assert_eq!(
-        message("[compensation]\nkind = \"none\"\n[dob]\nbandwidth = 5.0\nnominal_mass = 1.5\n"),
-        "accepted"
-    );
+    for accepted in [
+        "[compensation]\nkind = \"none\"\n[dob]\nbandwidth = 5.0\nnominal_mass = 1.5\n",
+        "[compensation]\nkind = \"none\"\nelement = \"bearing_friction\"\nerror = { sigma0 = 0.5 }\n",
+        "[compensation]\nkind = \"dahl\"\nelement = \"bearing_friction\"\nerror = { sigma0 = 0.5 }\n",
+    ] {
+        assert_eq!(message(accepted), "accepted", "{accepted}");
+    }
 }
 
 /// The servo's own states (integral, feedforward with and without a

@@ -8,7 +8,7 @@
 //! element = "bearing_friction"   # the friction element it models (its parameters are the default)
 //! error = { sigma0 = 0.5 }       # relative errors on the model: +50% sigma0
 //! # explicit model parameters instead of (or on top of) the element's:
-//! # sigma0 = 2.2e6, f_c = 5.1, ...   (dahl: sigma, f_c, exponent)
+//! # sigma0 = 2.2e6, f_c = 5.1, ...   (dahl: sigma, also named sigma0, f_c, exponent)
 //! isolator = "dynamic"           # dynamic | static | ignore (default dynamic when an
 //!                                # isolator carries the element)
 //!
@@ -89,8 +89,13 @@ impl CompensationKind {
         }
     }
 
-    /// The parameter named `name`.
+    /// The parameter named `name`. A Dahl model also takes `sigma0` for its
+    /// rest stiffness `sigma` (both are the pre-motion stiffness k_f).
     pub fn key(self, name: &str) -> Option<ModelKey> {
+        let name = match (self, name) {
+            (Self::Dahl, "sigma0") => "sigma",
+            _ => name,
+        };
         self.keys().into_iter().find(|k| k.name == name)
     }
 
@@ -248,8 +253,15 @@ pub(crate) fn read_compensation(
         }
     };
     let Some(kind) = kind else {
-        return match table.keys().find(|k| *k != "kind") {
-            Some(key) => Err(at(key, "kind = \"none\" takes no other key".into())),
+        // Switched off: the other keys may stay (a template toggled by its
+        // kind), but each must be one the table knows.
+        let known = |key: &str| {
+            ["kind", "element", "error", "isolator"].contains(&key)
+                || CompensationKind::Lugre.key(key).is_some()
+                || CompensationKind::Dahl.key(key).is_some()
+        };
+        return match table.keys().find(|k| !known(k)) {
+            Some(key) => Err(at(key, "unknown key".into())),
             None => Ok(None),
         };
     };
