@@ -1,5 +1,6 @@
 //! `fistage run SCENARIO [--out DIR]`: simulate a scenario, write the trajectory
-//! CSV, `summary.json` and plots, and print the steady-state summary.
+//! (CSV, a MAT-file or both), `summary.json` and plots, and print the
+//! steady-state summary.
 
 use std::fs::File;
 use std::io::BufWriter;
@@ -32,6 +33,12 @@ pub struct RunArgs {
     /// Fixed step of the rapier engine, s (instead of `rapier.dt`).
     #[arg(long)]
     pub dt: Option<f64>,
+    /// Trajectory files to write: csv (trajectory.csv), mat (trajectory.mat,
+    /// a version 7 MAT-file: one variable per signal, `signals` a cell array
+    /// of variable names, signal names and units) or both; instead of
+    /// `output.format`.
+    #[arg(long)]
+    pub format: Option<fistage_model::OutputFormat>,
     /// Replace an earlier result in the output folder (as a whole).
     #[arg(long)]
     pub force: bool,
@@ -64,9 +71,18 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     let output = fistage_sim::run_scenario(&loaded, &mut |f| progress::set_fraction(&bar, f))?;
     bar.finish_and_clear();
     let staging = folder.path();
-    write_csv(&output, &staging.join("trajectory.csv"))?;
+    let format = args.format.unwrap_or(loaded.scenario.output_format);
+    let mut written = Vec::new();
+    if format.csv() {
+        write_csv(&output, &staging.join("trajectory.csv"))?;
+        written.push("trajectory.csv".to_string());
+    }
+    if format.mat() {
+        write_mat(&output, &staging.join("trajectory.mat"))?;
+        written.push("trajectory.mat".to_string());
+    }
     write_summary(&loaded, &output, &staging.join("summary.json"))?;
-    let mut written = vec!["trajectory.csv".to_string(), "summary.json".to_string()];
+    written.push("summary.json".to_string());
     if !args.no_plots {
         written.extend(figures::run_figures(&loaded, &output, staging)?);
     }
@@ -91,6 +107,16 @@ fn write_csv(output: &RunOutput, path: &Path) -> anyhow::Result<()> {
     output
         .signals
         .write_csv(&mut writer)
+        .with_context(|| format!("cannot write {}", path.display()))
+}
+
+fn write_mat(output: &RunOutput, path: &Path) -> anyhow::Result<()> {
+    let file = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+    let mut writer = BufWriter::new(file);
+    output
+        .signals
+        .write_mat(&mut writer)
+        .and_then(|()| std::io::Write::flush(&mut writer))
         .with_context(|| format!("cannot write {}", path.display()))
 }
 

@@ -13,6 +13,18 @@ fn repository() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
+/// Runs `fistage` with these arguments; fails the test with its stderr
+/// unless it succeeds, and gives its stdout.
+fn succeeds<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> String {
+    let output = fistage().args(args).output().expect("fistage runs");
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("fistage-cli-{name}-{}", std::process::id()));
     std::fs::remove_dir_all(&dir).ok();
@@ -830,22 +842,11 @@ fn compare_reduction_follows_its_points_and_shards_merge() {
     let case = repository().join("scenarios/paper/fig03b_dob_fi.toml");
     let baseline = repository().join("scenarios/paper/fig03b_dob_rigid.toml");
     let compare = |out: &Path, extra: &[&str]| {
-        let output = fistage()
-            .arg("compare")
-            .arg(&case)
-            .arg("--baseline")
-            .arg(&baseline)
-            .arg("--out")
-            .arg(out)
-            .args(extra)
-            .output()
-            .expect("fistage runs");
-        assert!(
-            output.status.success(),
-            "{}",
-            String::from_utf8_lossy(&output.stderr)
-        );
-        String::from_utf8_lossy(&output.stdout).into_owned()
+        let mut args = vec!["compare".into(), case.as_os_str().to_owned()];
+        args.extend(["--baseline".into(), baseline.as_os_str().to_owned()]);
+        args.extend(["--out".into(), out.as_os_str().to_owned()]);
+        args.extend(extra.iter().map(std::ffi::OsString::from));
+        succeeds(&args)
     };
     let whole = scratch("compare-whole");
     let stdout = compare(&whole, &[]);
@@ -916,6 +917,91 @@ fn compare_reduction_follows_its_points_and_shards_merge() {
     // The same comparison again resumes every point.
     assert!(compare(&whole, &[]).contains("8 of 8 points"));
     for dir in [whole, a, b, merged] {
+        std::fs::remove_dir_all(dir).ok();
+    }
+}
+
+/// The Python with scipy that `.ci/run` makes (`FISTAGE_PYTHON`, or the
+/// environment under `target/`); `None` (SKIPPED) without it unless the
+/// system tests are required.
+fn scipy_python(test: &str) -> Option<PathBuf> {
+    let python = std::env::var_os("FISTAGE_PYTHON")
+        .map(PathBuf::from)
+        .or_else(|| Some(repository().join("target/fmi-venv/bin/python")).filter(|p| p.is_file()));
+    let has_scipy = python.as_ref().is_some_and(|p| {
+        Command::new(p)
+            .args(["-c", "import scipy.io"])
+            .status()
+            .is_ok_and(|s| s.success())
+    });
+    if has_scipy {
+        return python;
+    }
+    let why = "no Python with scipy (set FISTAGE_PYTHON, or run `bash ffi/tests/python/env.sh target/fmi-venv` as .ci/run does)";
+    let required = std::env::var("FISTAGE_SYSTEM_TESTS").is_ok_and(|v| v == "required");
+    assert!(!required, "{test}: {why}");
+    println!("SKIPPED {test}: {why}");
+    None
+}
+
+/// `--format mat` writes trajectory.mat alone, `output.format = "both"`
+/// both files, and scipy.io.loadmat reads the MAT-file back equal, value
+/// for value, to the CSV, with its table of names and units.
+#[test]
+fn run_writes_mat_files_that_scipy_reads() {
+    let scenario = repository().join("scenarios/paper/fig03b_dob_fi.toml");
+    let run = |out: &Path, scenario: &Path, extra: &[&str]| {
+        let mut args = vec!["run".into(), scenario.as_os_str().to_owned()];
+        args.extend([
+            "--out".into(),
+            out.as_os_str().to_owned(),
+            "--no-plots".into(),
+        ]);
+        args.extend(extra.iter().map(std::ffi::OsString::from));
+        succeeds(&args);
+    };
+    let mat_only = scratch("mat-only");
+    run(&mat_only, &scenario, &["--format", "mat"]);
+    assert!(mat_only.join("trajectory.mat").is_file());
+    assert!(!mat_only.join("trajectory.csv").exists());
+    let both = scratch("mat-both");
+    std::fs::create_dir_all(&both).expect("scratch");
+    let text = std::fs::read_to_string(&scenario)
+        .expect("scenario")
+        .replace("[output]\n", "[output]\nformat = \"both\"\n")
+        .replace(
+            "../../robots/",
+            &format!("{}/robots/", repository().display()),
+        );
+    let with_key = both.join("both.toml");
+    std::fs::write(&with_key, text).expect("scenario written");
+    let out = both.join("out");
+    run(&out, &with_key, &[]);
+    assert!(out.join("trajectory.csv").is_file() && out.join("trajectory.mat").is_file());
+    let bad = fistage()
+        .arg("run")
+        .arg(&scenario)
+        .args(["--format", "xls", "--out"])
+        .arg(scratch("mat-bad"))
+        .output()
+        .expect("fistage runs");
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("xls"));
+    if let Some(python) = scipy_python("run_writes_mat_files_that_scipy_reads") {
+        let check = Command::new(python)
+            .arg(repository().join("crates/cli/tests/python/read_mat.py"))
+            .arg(&out)
+            .output()
+            .expect("python runs");
+        assert!(
+            check.status.success(),
+            "{}{}",
+            String::from_utf8_lossy(&check.stdout),
+            String::from_utf8_lossy(&check.stderr)
+        );
+        println!("{}", String::from_utf8_lossy(&check.stdout));
+    }
+    for dir in [mat_only, both] {
         std::fs::remove_dir_all(dir).ok();
     }
 }

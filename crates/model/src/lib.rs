@@ -102,6 +102,6 @@ pub use robot::{FISTAGE_NS, IsolatorKey, RobotSpec};
 pub use rule::{Rule, RuleViolation};
 pub use scalar::{Dual64, Scalar};
 pub use scenario::{
-    ControllerSettings, EngineKind, Gain, Override, PayloadSettings, RapierSettings, Scenario,
-    SolverSettings, Start, StopSettings,
+    ControllerSettings, EngineKind, Gain, OutputFormat, Override, PayloadSettings, RapierSettings,
+    Scenario, SolverSettings, Start, StopSettings,
 };

@@ -355,6 +355,47 @@ fn default_payload_friction() -> f64 {
 struct OutputFile {
     sample_rate: Option<f64>,
     signals: Option<Vec<String>>,
+    #[serde(default)]
+    format: OutputFormat,
+}
+
+/// Which trajectory files `fistage run` writes (`output.format`, or `--format`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OutputFormat {
+    /// `trajectory.csv`.
+    #[default]
+    Csv,
+    /// `trajectory.mat` (a version 7 MAT-file).
+    Mat,
+    /// Both.
+    Both,
+}
+
+impl OutputFormat {
+    /// Whether `trajectory.csv` is written.
+    pub fn csv(self) -> bool {
+        self != Self::Mat
+    }
+
+    /// Whether `trajectory.mat` is written.
+    pub fn mat(self) -> bool {
+        self != Self::Csv
+    }
+}
+
+impl std::str::FromStr for OutputFormat {
+    type Err = String;
+
+    /// `csv`, `mat` or `both`, as scenario files write them.
+    fn from_str(text: &str) -> Result<Self, String> {
+        match text {
+            "csv" => Ok(Self::Csv),
+            "mat" => Ok(Self::Mat),
+            "both" => Ok(Self::Both),
+            other => Err(format!("unknown format \"{other}\" (csv, mat or both)")),
+        }
+    }
 }
 
 #[derive(Debug, Clone, Default, Deserialize)]
@@ -426,6 +467,8 @@ pub struct Scenario {
     pub sample_rate: f64,
     /// Signals to write (all when `None`).
     pub signals: Option<Vec<String>>,
+    /// Which trajectory files a run writes.
+    pub output_format: OutputFormat,
     /// Steady-state window for statistics, s.
     pub window: [f64; 2],
     /// Half-width of the band around its target that a staircase step must
@@ -591,6 +634,7 @@ impl Scenario {
             rapier: raw.rapier,
             sample_rate,
             signals: raw.output.signals,
+            output_format: raw.output.format,
             window,
             settle_window,
             sweep: raw.sweep,

@@ -41,6 +41,7 @@ pub mod dopri;
 mod driver;
 pub mod engine;
 pub mod excitation;
+pub mod matfile;
 pub mod metrics;
 pub mod rapier_engine;
 pub mod rosenbrock;
