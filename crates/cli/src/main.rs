@@ -19,11 +19,12 @@ mod progress;
 mod provenance;
 mod robust;
 mod run;
+mod shell;
 mod study;
 mod sweep;
 mod tune;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, Parser, Subcommand};
 
 #[derive(Parser)]
 #[command(
@@ -60,6 +61,10 @@ enum Command {
     Identify(identify::IdentifyArgs),
     /// Package a scenario as an FMI 2.0 Co-Simulation FMU.
     Fmu(fmu::FmuArgs),
+    /// Print the completion script of a shell (bash, zsh, fish, elvish, powershell).
+    Completions(shell::CompletionsArgs),
+    /// Write man pages: fistage.1 and one per command.
+    Man(shell::ManArgs),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -83,5 +88,7 @@ fn main() -> anyhow::Result<()> {
         Command::Tune(args) => tune::run(&args),
         Command::Lyapunov(args) => lyapunov::run(&args),
         Command::Fmu(args) => fmu::run(&args),
+        Command::Completions(args) => shell::completions(&args, Cli::command()),
+        Command::Man(args) => shell::man(&args, Cli::command()),
     }
 }

@@ -1005,3 +1005,53 @@ fn run_writes_mat_files_that_scipy_reads() {
         std::fs::remove_dir_all(dir).ok();
     }
 }
+
+/// The completion scripts name every command and parse in their shell
+/// (bash checked with `bash -n`); the man pages are roff with a page per
+/// command.
+#[test]
+fn completions_and_man_pages_cover_every_command() {
+    let commands = [
+        "run",
+        "check",
+        "bench",
+        "modes",
+        "sweep",
+        "compare",
+        "robust",
+        "tune",
+        "lyapunov",
+        "identify",
+        "fmu",
+        "completions",
+        "man",
+    ];
+    for shell in ["bash", "zsh", "fish", "elvish", "powershell"] {
+        let script = succeeds(&["completions", shell]);
+        for command in commands {
+            assert!(script.contains(command), "{shell} lacks {command}");
+        }
+    }
+    let folder = scratch("completion");
+    std::fs::create_dir_all(&folder).expect("scratch");
+    let bash_script = folder.join("fistage.bash");
+    std::fs::write(&bash_script, succeeds(&["completions", "bash"])).expect("written");
+    match Command::new("bash").arg("-n").arg(&bash_script).output() {
+        Ok(parsed) => assert!(
+            parsed.status.success(),
+            "{}",
+            String::from_utf8_lossy(&parsed.stderr)
+        ),
+        Err(e) => println!("SKIPPED bash -n: {e}"),
+    }
+    let pages = folder.join("man");
+    let pages_text = pages.display().to_string();
+    succeeds(&["man", "--out", &pages_text]);
+    let main = std::fs::read_to_string(pages.join("fistage.1")).expect("fistage.1");
+    assert!(main.contains(".TH fistage 1"), "{main}");
+    for command in commands {
+        let page = pages.join(format!("fistage-{command}.1"));
+        assert!(page.is_file(), "no page {}", page.display());
+    }
+    std::fs::remove_dir_all(folder).ok();
+}
