@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use fistage_model::EngineKind;
-use fistage_sim::{RunOutput, SignalSummary};
+use fistage_sim::RunOutput;
 
 use crate::output::OutputFolder;
 use crate::{figures, progress};
@@ -120,69 +120,13 @@ fn write_mat(output: &RunOutput, path: &Path) -> anyhow::Result<()> {
         .with_context(|| format!("cannot write {}", path.display()))
 }
 
-#[derive(serde::Serialize)]
-struct SummaryFile<'a> {
-    scenario: String,
-    title: &'a str,
-    robot: String,
-    duration_s: f64,
-    window_s: [f64; 2],
-    rtol: f64,
-    solver: &'a fistage_sim::SolverStats,
-    /// With a servo: RMS error, peak errors at reference reversals, settling times.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    tracking: Option<&'a fistage_sim::TrackingMetrics>,
-    signals: serde_json::Map<String, serde_json::Value>,
-}
-
 fn write_summary(
     loaded: &fistage_model::Loaded,
     output: &RunOutput,
     path: &Path,
 ) -> anyhow::Result<()> {
-    let scenario = &loaded.scenario;
-    let mut signals = serde_json::Map::new();
-    for s in &output.summary {
-        signals.insert(s.name.clone(), serde_json::to_value(SignalEntry::from(s))?);
-    }
-    let summary = SummaryFile {
-        scenario: scenario.file.display().to_string(),
-        title: &scenario.title,
-        robot: scenario.robot.display().to_string(),
-        duration_s: scenario.duration,
-        window_s: scenario.window,
-        rtol: scenario.solver.rtol,
-        solver: &output.trajectory.stats,
-        tracking: output.tracking.as_ref(),
-        signals,
-    };
-    let text = serde_json::to_string_pretty(&summary)?;
+    let text = serde_json::to_string_pretty(&fistage_sim::summary::document(loaded, output))?;
     std::fs::write(path, text + "\n").with_context(|| format!("cannot write {}", path.display()))
-}
-
-#[derive(serde::Serialize)]
-struct SignalEntry<'a> {
-    unit: &'a str,
-    mean: f64,
-    peak_to_peak: f64,
-    rms: f64,
-    min: f64,
-    max: f64,
-    std: f64,
-}
-
-impl<'a> From<&'a SignalSummary> for SignalEntry<'a> {
-    fn from(s: &'a SignalSummary) -> Self {
-        Self {
-            unit: &s.unit,
-            mean: s.stats.mean,
-            peak_to_peak: s.stats.peak_to_peak,
-            rms: s.stats.rms,
-            min: s.stats.min,
-            max: s.stats.max,
-            std: s.stats.std,
-        }
-    }
 }
 
 fn print_summary(loaded: &fistage_model::Loaded, output: &RunOutput) {

@@ -48,6 +48,7 @@ pub mod rosenbrock;
 pub mod run;
 pub mod select;
 pub mod settings;
+pub mod summary;
 pub mod tracking;
 pub mod trajectory;
 

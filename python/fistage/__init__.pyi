@@ -1,0 +1,51 @@
+"""Type stubs of the fistage package."""
+
+from os import PathLike
+from typing import Any, Dict, List, Optional, Union
+
+import numpy
+import numpy.typing
+
+class Error(Exception):
+    """Every error fistage raises."""
+
+class LoadError(Error):
+    """A scenario, robot or parameter the loader refuses."""
+
+class SimulationError(Error):
+    """A run the engine could not complete."""
+
+class Result:
+    """A finished run."""
+
+    time: numpy.typing.NDArray[numpy.float64]
+    """Sample times, s."""
+    signals: Dict[str, numpy.typing.NDArray[numpy.float64]]
+    """Every signal by name, SI units."""
+    units: Dict[str, str]
+    """The unit of every signal."""
+    summary: Dict[str, Any]
+    """As summary.json: scenario, window, solver statistics, tracking, per-signal statistics."""
+    def __getitem__(self, name: str) -> numpy.typing.NDArray[numpy.float64]: ...
+    def to_pandas(self) -> Any:
+        """The signals as a pandas DataFrame indexed by time (needs pandas)."""
+
+class Scenario:
+    """A scenario: its TOML text, the file its paths resolve against, and overrides."""
+
+    title: str
+    overrides: Dict[str, float]
+    @staticmethod
+    def from_toml(text: str, base_dir: Union[str, PathLike, None] = None) -> "Scenario":
+        """A scenario from TOML text; relative paths resolve against base_dir."""
+    def with_overrides(self, values: Dict[str, float]) -> "Scenario":
+        """A new scenario with these parameter-table values, each checked by its rule."""
+    def parameters(self) -> List[Dict[str, Any]]:
+        """Every parameter-table entry: path, value, unit, rule, description."""
+    def run(self, rtol: Optional[float] = None, engine: Optional[str] = None) -> Result:
+        """Simulates the scenario (interpreter released) and returns its signals."""
+
+def load(path: Union[str, PathLike]) -> Scenario:
+    """Reads and checks a scenario file and its robot."""
+
+def to_pandas(result: Result) -> Any: ...

@@ -1,0 +1,281 @@
+//! The extension module `fistage._fistage`: the library for Python, a thin
+//! face like the command line. A [`Scenario`] is the scenario file's text,
+//! the path its relative paths resolve against, and the parameter-table
+//! overrides set from Python; every call loads and checks it the way
+//! `fistage run` does, so errors carry the program's messages. Long work
+//! runs with the interpreter released.
+
+use std::path::{Path, PathBuf};
+
+use fistage_model::{
+    EngineKind, LoadError, Loaded, Parameter, RobotSpec, SolverSettings, assemble,
+};
+use numpy::PyArray1;
+use pyo3::create_exception;
+use pyo3::exceptions::{PyException, PyKeyError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
+
+create_exception!(_fistage, Error, PyException, "Every error fistage raises.");
+create_exception!(
+    _fistage,
+    LoadError_,
+    Error,
+    "A scenario, robot or parameter that the loader refuses (the message names file, key and fault)."
+);
+create_exception!(
+    _fistage,
+    SimulationError,
+    Error,
+    "A run that the engine could not complete."
+);
+
+fn load_error(e: LoadError) -> PyErr {
+    LoadError_::new_err(e.to_string())
+}
+
+/// A scenario: its TOML text, the file its relative paths resolve against,
+/// and parameter-table values set on top of it.
+#[pyclass(module = "fistage._fistage", frozen)]
+#[derive(Clone)]
+struct Scenario {
+    text: String,
+    file: PathBuf,
+    overrides: Vec<(String, f64)>,
+}
+
+impl Scenario {
+    /// The study, loaded and checked, overrides applied.
+    fn loaded(&self) -> Result<(Loaded, RobotSpec), LoadError> {
+        let scenario = fistage_model::Scenario::from_str(&self.text, &self.file)?;
+        let robot = RobotSpec::from_file(&scenario.robot)?;
+        let (assembled, model) = assemble(robot.clone(), &scenario)?;
+        let base = Loaded {
+            scenario,
+            robot: assembled,
+            model,
+        };
+        let assignments: Vec<(&str, f64)> = self
+            .overrides
+            .iter()
+            .map(|(p, v)| (p.as_str(), *v))
+            .collect();
+        let loaded = fistage_analysis::assess::study_with(&base, &robot, &assignments)?;
+        Ok((loaded, robot))
+    }
+}
+
+#[pymethods]
+impl Scenario {
+    /// Scenario.from_toml(text, base_dir=None): a scenario from TOML text;
+    /// its relative paths (the robot file) resolve against `base_dir`
+    /// (default: the working directory).
+    #[staticmethod]
+    #[pyo3(signature = (text, base_dir=None))]
+    fn from_toml(text: String, base_dir: Option<PathBuf>) -> PyResult<Self> {
+        let file = base_dir.unwrap_or_default().join("scenario.toml");
+        let scenario = Self {
+            text,
+            file,
+            overrides: Vec::new(),
+        };
+        scenario.loaded().map_err(load_error)?;
+        Ok(scenario)
+    }
+
+    /// with_overrides({path: value, ...}) -> Scenario: a new scenario with
+    /// these parameter-table values (paths as `fistage` names them:
+    /// "controller.c", "overrides.bearing_friction.f_s", ...), each checked
+    /// by its rule; the original is unchanged.
+    fn with_overrides(&self, values: &Bound<'_, PyDict>) -> PyResult<Self> {
+        let mut next = self.clone();
+        for (key, value) in values.iter() {
+            let path: String = key.extract()?;
+            let value: f64 = value.extract()?;
+            next.overrides.push((path, value));
+        }
+        next.loaded().map_err(load_error)?;
+        Ok(next)
+    }
+
+    /// parameters() -> list of dict: every entry of the parameter table
+    /// (path, value, unit, rule, description), values after the overrides.
+    fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        let (loaded, robot_file) = self.loaded().map_err(load_error)?;
+        let mut scenario = loaded.scenario.clone();
+        let mut robot = robot_file.clone();
+        for (path, value) in &self.overrides {
+            Parameter::resolve(path, &scenario, &robot)
+                .and_then(|p| p.write(&mut scenario, &mut robot, *value))
+                .map_err(load_error)?;
+        }
+        Parameter::all(&scenario, &robot)
+            .iter()
+            .map(|p| {
+                let entry = PyDict::new(py);
+                entry.set_item("path", p.path())?;
+                entry.set_item("value", p.read(&scenario, &robot))?;
+                entry.set_item("unit", p.unit())?;
+                entry.set_item("rule", p.rule().requirement())?;
+                entry.set_item("description", p.description(&robot))?;
+                Ok(entry)
+            })
+            .collect()
+    }
+
+    /// run(rtol=None, engine=None) -> Result: simulates the scenario (with
+    /// the interpreter released) and gives its signals as numpy arrays.
+    /// `engine` is "native", "rosenbrock" or "rapier".
+    #[pyo3(signature = (rtol=None, engine=None))]
+    fn run(&self, py: Python<'_>, rtol: Option<f64>, engine: Option<&str>) -> PyResult<RunResult> {
+        let (mut loaded, _) = self.loaded().map_err(load_error)?;
+        if let Some(rtol) = rtol {
+            SolverSettings::check_rtol(rtol)
+                .map_err(|why| Error::new_err(format!("rtol {why}")))?;
+            loaded.scenario.solver.rtol = rtol;
+        }
+        if let Some(engine) = engine {
+            let kind: EngineKind = engine.parse().map_err(Error::new_err)?;
+            loaded.scenario.solver.engine = kind;
+        }
+        let output = py
+            .detach(|| fistage_sim::run_scenario(&loaded, &mut |_| {}))
+            .map_err(|e| SimulationError::new_err(e.to_string()))?;
+        let summary = serde_json::to_string(&fistage_sim::summary::document(&loaded, &output))
+            .map_err(|e| Error::new_err(e.to_string()))?;
+        let json = py.import("json")?;
+        let summary = json.call_method1("loads", (summary,))?.unbind();
+        let table = output.signals;
+        let signals = PyDict::new(py);
+        let units = PyDict::new(py);
+        for ((name, unit), column) in table.names.iter().zip(&table.units).zip(table.columns) {
+            signals.set_item(name, PyArray1::from_vec(py, column))?;
+            units.set_item(name, unit)?;
+        }
+        Ok(RunResult {
+            time: PyArray1::from_vec(py, table.times).into_any().unbind(),
+            signals: signals.unbind(),
+            units: units.unbind(),
+            summary,
+        })
+    }
+
+    /// The scenario's title.
+    #[getter]
+    fn title(&self) -> PyResult<String> {
+        let scenario =
+            fistage_model::Scenario::from_str(&self.text, &self.file).map_err(load_error)?;
+        Ok(scenario.title)
+    }
+
+    /// The overrides set from Python, as a dict.
+    #[getter]
+    fn overrides<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let dict = PyDict::new(py);
+        for (path, value) in &self.overrides {
+            dict.set_item(path, value)?;
+        }
+        Ok(dict)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Scenario({}, {} overrides)",
+            self.file.display(),
+            self.overrides.len()
+        )
+    }
+
+    /// Pickling: the text, the file and the overrides.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        let restore = py
+            .import("fistage._fistage")?
+            .getattr("_restore_scenario")?;
+        let state = (
+            self.text.clone(),
+            self.file.display().to_string(),
+            self.overrides.clone(),
+        );
+        PyTuple::new(
+            py,
+            [restore.into_any(), state.into_pyobject(py)?.into_any()],
+        )
+    }
+}
+
+/// A finished run: `time` and every signal as numpy arrays, units and the
+/// summary (as summary.json holds it).
+#[pyclass(module = "fistage._fistage", name = "Result", frozen)]
+struct RunResult {
+    #[pyo3(get)]
+    time: Py<PyAny>,
+    #[pyo3(get)]
+    signals: Py<PyDict>,
+    #[pyo3(get)]
+    units: Py<PyDict>,
+    #[pyo3(get)]
+    summary: Py<PyAny>,
+}
+
+#[pymethods]
+impl RunResult {
+    /// result["encoder.position"]: one signal.
+    fn __getitem__<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyAny>> {
+        let signals = self.signals.bind(py);
+        match signals.get_item(name)? {
+            Some(values) => Ok(values),
+            None => {
+                let names: Vec<String> = signals.keys().extract()?;
+                Err(PyKeyError::new_err(format!(
+                    "no signal \"{name}\" (signals: {})",
+                    names.join(", ")
+                )))
+            }
+        }
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> String {
+        format!("Result({} signals)", self.signals.bind(py).len())
+    }
+}
+
+/// load(path) -> Scenario: reads and checks a scenario file and its robot.
+#[pyfunction]
+fn load(path: PathBuf) -> PyResult<Scenario> {
+    let text = fistage_model::input::read_text(&path, fistage_model::input::MAX_DESCRIPTION_BYTES)
+        .map_err(|reason| {
+            load_error(LoadError::Io {
+                file: path.clone(),
+                reason,
+            })
+        })?;
+    let scenario = Scenario {
+        text,
+        file: path,
+        overrides: Vec::new(),
+    };
+    scenario.loaded().map_err(load_error)?;
+    Ok(scenario)
+}
+
+/// Unpickling.
+#[pyfunction]
+fn _restore_scenario(text: String, file: String, overrides: Vec<(String, f64)>) -> Scenario {
+    Scenario {
+        text,
+        file: Path::new(&file).to_path_buf(),
+        overrides,
+    }
+}
+
+#[pymodule]
+fn _fistage(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Scenario>()?;
+    m.add_class::<RunResult>()?;
+    m.add_function(wrap_pyfunction!(load, m)?)?;
+    m.add_function(wrap_pyfunction!(_restore_scenario, m)?)?;
+    m.add("Error", m.py().get_type::<Error>())?;
+    m.add("LoadError", m.py().get_type::<LoadError_>())?;
+    m.add("SimulationError", m.py().get_type::<SimulationError>())?;
+    Ok(())
+}
