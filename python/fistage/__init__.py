@@ -14,9 +14,28 @@ runs over parameters. Errors are subclasses of :class:`fistage.Error` with
 the program's messages.
 """
 
-from ._fistage import Error, LoadError, Result, Scenario, SimulationError, load
+from ._fistage import (
+    Error,
+    IdentificationError,
+    LoadError,
+    Result,
+    Scenario,
+    SimulationError,
+    load,
+)
+from . import identify
 
-__all__ = ["Error", "LoadError", "Result", "Scenario", "SimulationError", "load", "to_pandas"]
+__all__ = [
+    "Error",
+    "IdentificationError",
+    "LoadError",
+    "Result",
+    "Scenario",
+    "SimulationError",
+    "identify",
+    "load",
+    "to_pandas",
+]
 
 
 def to_pandas(result):

@@ -6,6 +6,8 @@ from typing import Any, Dict, List, Optional, Union
 import numpy
 import numpy.typing
 
+from . import identify as identify
+
 class Error(Exception):
     """Every error fistage raises."""
 
@@ -14,6 +16,9 @@ class LoadError(Error):
 
 class SimulationError(Error):
     """A run the engine could not complete."""
+
+class IdentificationError(Error):
+    """A fit the data or the options do not allow."""
 
 class Result:
     """A finished run."""
@@ -44,6 +49,8 @@ class Scenario:
         """Every parameter-table entry: path, value, unit, rule, description."""
     def run(self, rtol: Optional[float] = None, engine: Optional[str] = None) -> Result:
         """Simulates the scenario (interpreter released) and returns its signals."""
+    def modes(self, equilibrium: str = "slipping") -> Dict[str, Any]:
+        """The linearisation at an equilibrium, as modes.json, with numpy eigenvalues."""
 
 def load(path: Union[str, PathLike]) -> Scenario:
     """Reads and checks a scenario file and its robot."""

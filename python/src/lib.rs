@@ -29,6 +29,14 @@ create_exception!(
     Error,
     "A run that the engine could not complete."
 );
+create_exception!(
+    _fistage,
+    IdentificationError,
+    Error,
+    "A fit the data or the options do not allow."
+);
+
+mod identify;
 
 fn load_error(e: LoadError) -> PyErr {
     LoadError_::new_err(e.to_string())
@@ -160,6 +168,49 @@ impl Scenario {
         })
     }
 
+    /// modes(equilibrium="slipping") -> dict: the linearisation at the
+    /// sticking or slipping equilibrium, as modes.json holds it (verdict,
+    /// max_real_part, state, coordinates, modes with frequency, damping
+    /// ratio and energy shares), plus numpy arrays `eigenvalues` (complex),
+    /// `frequency_hz` and `damping_ratio`. A verdict the numerics cannot
+    /// back is "undetermined".
+    #[pyo3(signature = (equilibrium = "slipping"))]
+    fn modes<'py>(&self, py: Python<'py>, equilibrium: &str) -> PyResult<Bound<'py, PyAny>> {
+        let kind = match equilibrium {
+            "sticking" => fistage_model::EquilibriumKind::Sticking,
+            "slipping" => fistage_model::EquilibriumKind::Slipping,
+            other => {
+                return Err(Error::new_err(format!(
+                    "equilibrium must be \"sticking\" or \"slipping\", got \"{other}\""
+                )));
+            }
+        };
+        let (loaded, _) = self.loaded().map_err(load_error)?;
+        let inputs = fistage_analysis::modes::equilibrium_inputs(&loaded.scenario);
+        let start =
+            fistage_sim::initial_state(&loaded.model, &loaded.scenario).map_err(load_error)?;
+        let analysis = py
+            .detach(|| fistage_analysis::modal_analysis(&loaded.model, &inputs, kind, &start))
+            .map_err(|e| Error::new_err(e.to_string()))?;
+        let text = serde_json::to_string(&analysis).map_err(|e| Error::new_err(e.to_string()))?;
+        let result = py.import("json")?.call_method1("loads", (text,))?;
+        let numpy = py.import("numpy")?;
+        let column = |values: Vec<f64>| numpy.call_method1("array", (values,));
+        let real: Vec<f64> = analysis.modes.iter().map(|m| m.real).collect();
+        let imag: Vec<f64> = analysis.modes.iter().map(|m| m.imag).collect();
+        let eigenvalues = column(real)?.add(column(imag)?.mul(py.eval(c"1j", None, None)?)?)?;
+        result.set_item("eigenvalues", eigenvalues)?;
+        result.set_item(
+            "frequency_hz",
+            column(analysis.modes.iter().map(|m| m.frequency_hz).collect())?,
+        )?;
+        result.set_item(
+            "damping_ratio",
+            column(analysis.modes.iter().map(|m| m.damping_ratio).collect())?,
+        )?;
+        Ok(result)
+    }
+
     /// The scenario's title.
     #[getter]
     fn title(&self) -> PyResult<String> {
@@ -277,5 +328,11 @@ fn _fistage(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("Error", m.py().get_type::<Error>())?;
     m.add("LoadError", m.py().get_type::<LoadError_>())?;
     m.add("SimulationError", m.py().get_type::<SimulationError>())?;
+    m.add(
+        "IdentificationError",
+        m.py().get_type::<IdentificationError>(),
+    )?;
+    m.add_function(wrap_pyfunction!(identify::_stribeck, m)?)?;
+    m.add_function(wrap_pyfunction!(identify::_frf, m)?)?;
     Ok(())
 }

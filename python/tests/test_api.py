@@ -102,3 +102,19 @@ def test_pandas_frame_when_pandas_is_installed(root):
     assert isinstance(frame, pandas.DataFrame)
     assert frame.attrs["units"]["encoder.position"] == "m"
     assert len(frame) == 5001
+
+
+def test_modes_give_the_program_s_verdict(root):
+    modes = fig05b(root).modes()
+    # Fig. 5b's FI stage: the slipping equilibrium is linearly stable (the
+    # limit cycle beside it is the bistable case, RESULTS.md).
+    assert modes["verdict"] == "stable" and modes["stable"]
+    assert modes["max_real_part"] < 0
+    eigenvalues = modes["eigenvalues"]
+    assert eigenvalues.dtype == numpy.complex128
+    assert numpy.max(eigenvalues.real) == pytest.approx(modes["max_real_part"], rel=1e-9)
+    assert len(modes["frequency_hz"]) == len(modes["modes"])
+    sticking = fig05b(root).modes("sticking")
+    assert sticking["equilibrium"] == "sticking"
+    with pytest.raises(fistage.Error, match="sticking"):
+        fig05b(root).modes("sliding")

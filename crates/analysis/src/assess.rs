@@ -196,10 +196,7 @@ pub fn study_with(
 /// Linear verdict at the slipping equilibrium: (stable, or `None` when the
 /// eigenvalues cannot back a verdict; largest real part).
 pub fn linear_verdict(loaded: &Loaded) -> Option<(Option<bool>, f64)> {
-    let scenario = &loaded.scenario;
-    let mut inputs = ScenarioExcitation::from_scenario(scenario).inputs(0.0);
-    inputs.platform_velocity = scenario.platform_velocity - scenario.reference.traverse_velocity();
-    inputs.reference = Default::default();
+    let inputs = crate::modes::equilibrium_inputs(&loaded.scenario);
     let analysis = modal_analysis(
         &loaded.model,
         &inputs,

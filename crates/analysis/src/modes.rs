@@ -157,6 +157,17 @@ fn verdict(
     (Verdict::Stable, None)
 }
 
+/// The inputs at which a scenario's equilibria are studied: no reference
+/// motion, and the counter-surface at the platform velocity less the
+/// reference's traverse velocity (a traverse at V over a still surface is,
+/// for the friction, the stage at rest over a surface sliding at -V).
+pub fn equilibrium_inputs(scenario: &fistage_model::Scenario) -> Inputs {
+    Inputs {
+        platform_velocity: scenario.platform_velocity - scenario.reference.traverse_velocity(),
+        ..Inputs::default()
+    }
+}
+
 /// Everything the linearisation at one equilibrium says.
 #[derive(Debug, Clone, Serialize)]
 pub struct ModalAnalysis {

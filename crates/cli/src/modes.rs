@@ -8,7 +8,7 @@ use anyhow::Context;
 use fistage_analysis::{ModalAnalysis, Mode, Verdict, modal_analysis};
 use fistage_model::{EquilibriumKind, Frame, JointMotion, Loaded};
 use fistage_plot::{Series, XyPlot, write_xy};
-use fistage_sim::{Excitation, ScenarioExcitation, initial_state};
+use fistage_sim::initial_state;
 use nalgebra::Vector3;
 
 use crate::output::OutputFolder;
@@ -50,11 +50,7 @@ pub struct ModesArgs {
 pub fn run(args: &ModesArgs) -> anyhow::Result<()> {
     let loaded = fistage_model::load(&args.scenario)?;
     let scenario = &loaded.scenario;
-    let mut inputs = ScenarioExcitation::from_scenario(scenario).inputs(0.0);
-    // A traverse at velocity V over a still counter-surface is, for the
-    // friction, the stage at rest over a surface sliding at -V.
-    inputs.platform_velocity = scenario.platform_velocity - scenario.reference.traverse_velocity();
-    inputs.reference = Default::default();
+    let inputs = fistage_analysis::modes::equilibrium_inputs(scenario);
     let start = initial_state(&loaded.model, scenario)?;
     let kinds: Vec<EquilibriumKind> = match args.equilibrium {
         Which::Sticking => vec![EquilibriumKind::Sticking],
