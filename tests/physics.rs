@@ -274,16 +274,7 @@ fn integral_action_lets_staircase_steps_settle() {
                 .display()
                 .to_string()
         );
-        let scenario =
-            fistage_model::Scenario::from_str(&text, std::path::Path::new("stairs.toml"))
-                .expect("scenario");
-        let robot = fistage_model::RobotSpec::from_file(&scenario.robot).expect("robot");
-        let (robot, model) = assemble(robot, &scenario).expect("model");
-        let loaded = fistage_model::Loaded {
-            scenario,
-            robot,
-            model,
-        };
+        let loaded = fistage_tests::load_text(&text);
         let output = fistage_sim::run_scenario(&loaded, &mut |_| {}).expect("run");
         output
             .tracking

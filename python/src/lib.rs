@@ -7,6 +7,7 @@
 
 use std::path::{Path, PathBuf};
 
+use fistage_analysis::assess::apply_parameter;
 use fistage_model::{
     EngineKind, LoadError, Loaded, Parameter, RobotSpec, SolverSettings, assemble,
 };
@@ -53,23 +54,26 @@ struct Scenario {
 }
 
 impl Scenario {
+    /// The scenario and the robot file as read, the overrides written into
+    /// them through the parameter table (each checked by its rule).
+    fn study(&self) -> Result<(fistage_model::Scenario, RobotSpec), LoadError> {
+        let mut scenario = fistage_model::Scenario::from_str(&self.text, &self.file)?;
+        let mut robot = RobotSpec::from_file(&scenario.robot)?;
+        for (path, value) in &self.overrides {
+            apply_parameter(&mut scenario, &mut robot, path, *value)?;
+        }
+        Ok((scenario, robot))
+    }
+
     /// The study, loaded and checked, overrides applied.
-    fn loaded(&self) -> Result<(Loaded, RobotSpec), LoadError> {
-        let scenario = fistage_model::Scenario::from_str(&self.text, &self.file)?;
-        let robot = RobotSpec::from_file(&scenario.robot)?;
-        let (assembled, model) = assemble(robot.clone(), &scenario)?;
-        let base = Loaded {
+    fn loaded(&self) -> Result<Loaded, LoadError> {
+        let (scenario, robot) = self.study()?;
+        let (robot, model) = assemble(robot, &scenario)?;
+        Ok(Loaded {
             scenario,
-            robot: assembled,
+            robot,
             model,
-        };
-        let assignments: Vec<(&str, f64)> = self
-            .overrides
-            .iter()
-            .map(|(p, v)| (p.as_str(), *v))
-            .collect();
-        let loaded = fistage_analysis::assess::study_with(&base, &robot, &assignments)?;
-        Ok((loaded, robot))
+        })
     }
 }
 
@@ -109,14 +113,8 @@ impl Scenario {
     /// parameters() -> list of dict: every entry of the parameter table
     /// (path, value, unit, rule, description), values after the overrides.
     fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
-        let (loaded, robot_file) = self.loaded().map_err(load_error)?;
-        let mut scenario = loaded.scenario.clone();
-        let mut robot = robot_file.clone();
-        for (path, value) in &self.overrides {
-            Parameter::resolve(path, &scenario, &robot)
-                .and_then(|p| p.write(&mut scenario, &mut robot, *value))
-                .map_err(load_error)?;
-        }
+        self.loaded().map_err(load_error)?;
+        let (scenario, robot) = self.study().map_err(load_error)?;
         Parameter::all(&scenario, &robot)
             .iter()
             .map(|p| {
@@ -136,7 +134,7 @@ impl Scenario {
     /// `engine` is "native", "rosenbrock" or "rapier".
     #[pyo3(signature = (rtol=None, engine=None))]
     fn run(&self, py: Python<'_>, rtol: Option<f64>, engine: Option<&str>) -> PyResult<RunResult> {
-        let (mut loaded, _) = self.loaded().map_err(load_error)?;
+        let mut loaded = self.loaded().map_err(load_error)?;
         if let Some(rtol) = rtol {
             SolverSettings::check_rtol(rtol)
                 .map_err(|why| Error::new_err(format!("rtol {why}")))?;
@@ -185,7 +183,7 @@ impl Scenario {
                 )));
             }
         };
-        let (loaded, _) = self.loaded().map_err(load_error)?;
+        let loaded = self.loaded().map_err(load_error)?;
         let inputs = fistage_analysis::modes::equilibrium_inputs(&loaded.scenario);
         let start =
             fistage_sim::initial_state(&loaded.model, &loaded.scenario).map_err(load_error)?;

@@ -234,19 +234,25 @@ impl Reference {
 
     /// The value of a number key (see [`Self::numbers_mut`]).
     pub fn number(&self, key: &str) -> Option<f64> {
-        self.clone()
-            .numbers_mut()
+        self.numbers()
             .into_iter()
             .find(|(k, _)| *k == key)
-            .map(|(_, v)| *v)
+            .map(|(_, v)| v)
     }
 
     /// The number keys of this reference.
     pub fn number_keys(&self) -> Vec<&'static str> {
-        self.clone()
-            .numbers_mut()
-            .into_iter()
-            .map(|(k, _)| k)
+        self.numbers().into_iter().map(|(k, _)| k).collect()
+    }
+
+    /// The number keys with their values (a sampled reference, which has
+    /// none, is not copied to find that out).
+    fn numbers(&self) -> Vec<(&'static str, f64)> {
+        if matches!(self, Self::Samples { .. }) {
+            return Vec::new();
+        }
+        (self.clone().numbers_mut().into_iter())
+            .map(|(k, v)| (k, *v))
             .collect()
     }
 }
