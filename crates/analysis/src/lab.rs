@@ -174,7 +174,7 @@ impl LabStage {
     }
 
     /// The stage's model with the given servo (none: open loop).
-    fn model(&self, controller: Option<ControllerSettings>) -> Result<Model> {
+    pub(crate) fn model(&self, controller: Option<ControllerSettings>) -> Result<Model> {
         let mut scenario = self.scenario.clone();
         scenario.controller = controller;
         scenario.platform_velocity = 0.0;
@@ -183,7 +183,7 @@ impl LabStage {
     }
 
     /// Indices of the actuator force and the sensor position among the model's signals.
-    fn force_and_position(&self, model: &Model) -> Result<[usize; 2]> {
+    pub(crate) fn force_and_position(&self, model: &Model) -> Result<[usize; 2]> {
         let signal = |name: String| {
             model
                 .signal_index(&name)
@@ -198,7 +198,7 @@ impl LabStage {
         ])
     }
 
-    fn simulation_error(&self, what: &str, error: impl std::fmt::Display) -> IdentError {
+    pub(crate) fn simulation_error(&self, what: &str, error: impl std::fmt::Display) -> IdentError {
         IdentError::Simulation {
             file: self.source.clone(),
             message: format!("{what}: {error}"),
@@ -207,7 +207,7 @@ impl LabStage {
 }
 
 /// Integrates `model` from `x0` over `[0, t_end]`, sampled every `dt`.
-fn simulate(
+pub(crate) fn simulate(
     model: &Model,
     x0: &[f64],
     excitation: &dyn Excitation,

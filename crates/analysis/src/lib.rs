@@ -37,6 +37,7 @@ pub mod eigen;
 pub mod lab;
 pub mod lyapunov;
 pub mod modes;
+pub mod record_lab;
 pub mod robust;
 pub mod routh;
 pub mod sweep;

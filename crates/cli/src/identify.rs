@@ -5,6 +5,8 @@
 //! fistage identify frf DATA.csv [--mass M | --fit-mass] [--sigma2 S] [--json] [--out DIR]
 //! fistage identify simulate-stribeck ROBOT_OR_SCENARIO --out DATA.csv [--points N] [--exact]
 //! fistage identify simulate-frf ROBOT_OR_SCENARIO --out DATA.csv [--amplitude N] [--exact]
+//! fistage identify record DATA [--mass M | --fit-mass] [--json] [--out DIR] (see identify_record)
+//! fistage identify simulate-record ROBOT_OR_SCENARIO --out DATA.csv|DATA.mat
 //! ```
 //!
 //! Prints a table (or the JSON report with `--json`); with `--out DIR` also writes
@@ -40,6 +42,7 @@ use fistage_ident::{
 };
 use fistage_plot::{BodeSeries, Series, SeriesStyle, XyPlot, write_bode, write_xy};
 
+use crate::identify_record::{RecordArgs, SimulateRecordArgs, run_record, simulate_record};
 use crate::output::OutputFolder;
 
 /// Arguments of `fistage identify`.
@@ -61,24 +64,30 @@ enum IdentifyCommand {
     /// Measure the pre-motion FRF on the simulated open-loop stage (stepped
     /// sine) and write it as a lab CSV (freq_Hz, mag_dB, phase_deg).
     SimulateFrf(SimulateFrfArgs),
+    /// Fit all six LuGre parameters (and the mass) to a recorded run (force
+    /// command and encoder position) by output error.
+    Record(RecordArgs),
+    /// Make a lab-style record (chirps, breakaway ramps, holds, steps,
+    /// rests) on the simulated open-loop stage and write it as CSV or MAT.
+    SimulateRecord(SimulateRecordArgs),
 }
 
 /// Arguments shared by the simulated measurements.
 #[derive(Args)]
-struct SimulateArgs {
+pub(crate) struct SimulateArgs {
     /// The stage: a robot file (.urdf) or a scenario (.toml: its robot and
     /// overrides, and its servo's sensor and actuator; its gains, reference
     /// and platform are not used).
-    stage: PathBuf,
-    /// The CSV file to write.
+    pub(crate) stage: PathBuf,
+    /// The file to write (CSV; a MAT-file for a record named `.mat`).
     #[arg(long, value_name = "FILE")]
-    out: PathBuf,
+    pub(crate) out: PathBuf,
     /// Seed of the sensor errors.
     #[arg(long, default_value_t = 1)]
-    seed: u64,
-    /// No sensor errors (noise, scatter, quantisation).
+    pub(crate) seed: u64,
+    /// No sensor errors (noise, scatter, quantisation, disturbance).
     #[arg(long)]
-    exact: bool,
+    pub(crate) exact: bool,
 }
 
 #[derive(Args)]
@@ -117,28 +126,28 @@ struct SimulateFrfArgs {
 
 /// Output options shared by both fits.
 #[derive(Args)]
-struct OutputArgs {
+pub(crate) struct OutputArgs {
     /// Print the JSON report instead of the table.
     #[arg(long)]
-    json: bool,
+    pub(crate) json: bool,
     /// Write fit.json, override.toml, data_vs_fit.csv, fit_curve.csv and the
     /// data-vs-fit plot fit.svg / fit.png into DIR.
     #[arg(long, value_name = "DIR")]
-    out: Option<PathBuf>,
+    pub(crate) out: Option<PathBuf>,
     /// Friction element that override.toml applies to.
     #[arg(long, value_name = "NAME", default_value = DEFAULT_ELEMENT)]
-    element: String,
+    pub(crate) element: String,
     /// Replace an earlier result in the --out folder (as a whole).
     #[arg(long)]
-    force: bool,
+    pub(crate) force: bool,
     /// Exit 0 even when a parameter is not identifiable from the data (it is
     /// still named, and still left out of override.toml).
     #[arg(long)]
-    allow_undetermined: bool,
+    pub(crate) allow_undetermined: bool,
 }
 
 /// The refusal of an undetermined fit, saying that `--out` was left as it was.
-fn nothing_written(error: anyhow::Error, output: &OutputArgs) -> anyhow::Error {
+pub(crate) fn nothing_written(error: anyhow::Error, output: &OutputArgs) -> anyhow::Error {
     match &output.out {
         Some(dir) => error.context(format!(
             "nothing written to {} (--allow-undetermined writes the fit)",
@@ -150,7 +159,7 @@ fn nothing_written(error: anyhow::Error, output: &OutputArgs) -> anyhow::Error {
 
 /// Fails, after the report is shown, when the data leave parameters
 /// undetermined and the user did not allow it (then nothing is written).
-fn refuse_undetermined(
+pub(crate) fn refuse_undetermined(
     output: &OutputArgs,
     not_identifiable: &[fistage_ident::NotIdentifiable],
 ) -> Result<()> {
@@ -252,6 +261,8 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         IdentifyCommand::Frf(a) => run_frf(a),
         IdentifyCommand::SimulateStribeck(a) => simulate_stribeck(a),
         IdentifyCommand::SimulateFrf(a) => simulate_frf(a),
+        IdentifyCommand::Record(a) => run_record(a),
+        IdentifyCommand::SimulateRecord(a) => simulate_record(a),
     }
 }
 
@@ -363,7 +374,7 @@ fn write_file(path: &Path, text: &str) -> Result<()> {
 }
 
 /// `--element` names a friction element of a robot file: the same rules.
-fn check_element(output: &OutputArgs) -> Result<()> {
+pub(crate) fn check_element(output: &OutputArgs) -> Result<()> {
     fistage_model::robot::check_name(&output.element).map_err(|why| {
         anyhow::anyhow!(
             "--element {:?}: {why} (it must be a name a robot file accepts)",
@@ -467,7 +478,7 @@ fn run_frf(args: &FrfArgs) -> Result<()> {
     verdict.map_err(|e| nothing_written(e, &args.output))
 }
 
-fn print_report(json: bool, json_text: &str, table: &str) {
+pub(crate) fn print_report(json: bool, json_text: &str, table: &str) {
     if json {
         println!("{json_text}");
     } else {
@@ -476,7 +487,7 @@ fn print_report(json: bool, json_text: &str, table: &str) {
 }
 
 /// The unit given by a `--*-unit` flag, checked against its quantity.
-fn unit_flag(quantity: Quantity, flag: &Option<String>) -> Result<Option<Unit>> {
+pub(crate) fn unit_flag(quantity: Quantity, flag: &Option<String>) -> Result<Option<Unit>> {
     let Some(text) = flag else {
         return Ok(None);
     };

@@ -12,6 +12,7 @@ mod compare;
 mod figures;
 mod fmu;
 mod identify;
+mod identify_record;
 mod lyapunov;
 mod modes;
 mod output;

@@ -1055,3 +1055,88 @@ fn completions_and_man_pages_cover_every_command() {
     }
     std::fs::remove_dir_all(folder).ok();
 }
+
+/// `identify simulate-record` on the rigid one-bearing stage (the full
+/// assembled model) and `identify record` on its CSV and MAT-files recover
+/// the stage's six LuGre parameters and its mass: the one-mass plant of the
+/// fit and the general assembly agree. Files scipy writes (version 5,
+/// plain and compressed, row vectors) read the same; bad input is named.
+#[test]
+fn record_identification_recovers_the_stage_from_csv_and_mat() {
+    let dir = scratch("record-ident");
+    std::fs::create_dir_all(&dir).expect("scratch");
+    let robot = repository().join("robots/stage_1dof_rigid.urdf");
+    let csv = dir.join("run.csv");
+    let printed = succeeds(&[
+        "identify".as_ref(),
+        "simulate-record".as_ref(),
+        robot.as_os_str(),
+        "--out".as_ref(),
+        csv.as_os_str(),
+    ]);
+    let truth_text = printed
+        .lines()
+        .find_map(|l| l.split_once("): ").map(|(_, json)| json.to_string()))
+        .expect("the truth is printed");
+    let truth: serde_json::Value = serde_json::from_str(&truth_text).expect("truth JSON");
+    let mat = dir.join("run.mat");
+    succeeds(&[
+        "identify".as_ref(),
+        "simulate-record".as_ref(),
+        robot.as_os_str(),
+        "--out".as_ref(),
+        mat.as_os_str(),
+    ]);
+    let mut inputs = vec![csv.clone(), mat];
+    if let Some(python) = scipy_python("record_identification_recovers_the_stage_from_csv_and_mat")
+    {
+        let (plain, compressed) = (dir.join("scipy_v5.mat"), dir.join("scipy_v7.mat"));
+        let status = Command::new(python)
+            .arg(repository().join("crates/cli/tests/python/write_record_mat.py"))
+            .args([&csv, &plain, &compressed])
+            .status()
+            .expect("python runs");
+        assert!(status.success());
+        inputs.extend([plain, compressed]);
+    }
+    for (i, input) in inputs.iter().enumerate() {
+        let out = dir.join(format!("fit{i}"));
+        succeeds(&[
+            "identify".as_ref(),
+            "record".as_ref(),
+            input.as_os_str(),
+            "--out".as_ref(),
+            out.as_os_str(),
+        ]);
+        let fit: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("fit.json")).expect("fit.json"))
+                .expect("JSON");
+        for name in ["f_c", "f_s", "v_s", "sigma0", "sigma1", "sigma2", "mass"] {
+            let value = fit[name]["value"].as_f64().expect("value");
+            let exact = truth[name].as_f64().expect("truth");
+            assert!(
+                (value / exact - 1.0).abs() < 1e-3,
+                "{}: {name} = {value}, truth {exact}",
+                input.display()
+            );
+            assert!(fit[name]["ci95"].is_array() && fit[name]["unit"].is_string());
+        }
+        for file in ["override.toml", "data_vs_fit.csv", "fit.svg", "fit.png"] {
+            assert!(out.join(file).is_file(), "{file}");
+        }
+    }
+    let bad = dir.join("bad.csv");
+    std::fs::write(&bad, "t_s,f_servo_N,x_nm\n0,0,0\n0.0001,zero,0\n").expect("written");
+    let output = fistage()
+        .args(["identify", "record"])
+        .arg(&bad)
+        .output()
+        .expect("fistage runs");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success());
+    assert!(
+        stderr.contains("bad.csv") && stderr.contains("line 3") && stderr.contains("f_servo_N"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

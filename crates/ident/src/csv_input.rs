@@ -21,6 +21,7 @@ use std::path::Path;
 use crate::Complex;
 use crate::error::{IdentError, Result};
 use crate::frf::FrfData;
+use crate::record::{Record, StartState};
 use crate::stribeck::StribeckData;
 use crate::units::{Quantity, Unit};
 
@@ -40,6 +41,10 @@ pub struct UnitOverrides {
     pub phase: Option<Unit>,
     /// Unit of unsuffixed real and imaginary part columns.
     pub response: Option<Unit>,
+    /// Unit of an unsuffixed time column (records).
+    pub time: Option<Unit>,
+    /// Unit of an unsuffixed position column (records).
+    pub position: Option<Unit>,
 }
 
 impl UnitOverrides {
@@ -52,6 +57,8 @@ impl UnitOverrides {
             Quantity::Magnitude => self.magnitude,
             Quantity::Phase => self.phase,
             Quantity::RealPart | Quantity::ImagPart => self.response,
+            Quantity::Time => self.time,
+            Quantity::Position => self.position,
         }
     }
 }
@@ -78,6 +85,28 @@ pub fn parse_stribeck_csv(source: &str, text: &str, units: &UnitOverrides) -> Re
         force: forces,
         lines,
     })
+}
+
+/// Parses a recorded run from CSV text: time, force and position columns
+/// (see [`crate::record`] for the conventions); `source` names it in messages.
+pub fn parse_record_csv(source: &str, text: &str, units: &UnitOverrides) -> Result<Record> {
+    let table = Table::parse(source, text)?;
+    let columns = [Quantity::Time, Quantity::Force, Quantity::Position]
+        .map(|quantity| table.require(quantity, units));
+    let [time, force, position] = columns;
+    let [time, force, position] = [time?, force?, position?];
+    let record = Record {
+        source: source.to_string(),
+        rows: table.lines(),
+        row_word: "line",
+        time: table.values(&time)?,
+        force: table.values(&force)?,
+        position: table.values(&position)?,
+        columns: [time.name, force.name, position.name],
+        start: StartState::default(),
+    };
+    record.check()?;
+    Ok(record)
 }
 
 /// Reads an FRF: frequency and either real and imaginary parts or magnitude (and phase).
@@ -172,7 +201,7 @@ pub const MAX_ROWS: usize = 50_000_000;
 /// Bytes a file may hold, checked before it is read.
 const MAX_FILE_BYTES: u64 = 4 << 30;
 
-fn read_file(path: &Path) -> Result<(String, String)> {
+pub(crate) fn read_file(path: &Path) -> Result<(String, String)> {
     let source = path.display().to_string();
     match fistage_model::input::read_text(path, MAX_FILE_BYTES) {
         Ok(text) => Ok((source, text)),
@@ -193,7 +222,7 @@ struct Column {
 }
 
 /// How a header cell relates to a quantity.
-enum HeaderMatch {
+pub(crate) enum HeaderMatch {
     /// Not a column of that quantity.
     No,
     /// A column of that quantity with this unit (or none written).
@@ -203,7 +232,7 @@ enum HeaderMatch {
 }
 
 /// Splits `velocity [mm/s]`, `velocity (mm/s)`, `velocity_mm_per_s` against one stem.
-fn match_header(name: &str, quantity: Quantity) -> HeaderMatch {
+pub(crate) fn match_header(name: &str, quantity: Quantity) -> HeaderMatch {
     let lower = name.trim().to_lowercase();
     let (stem_part, bracket_unit) = split_bracket(&lower);
     let mut bad = None;

@@ -70,6 +70,52 @@ pub enum IdentError {
         /// What is wrong.
         message: String,
     },
+    /// A MAT-file cannot be read.
+    #[error("{file}: {message}")]
+    NotMatFile {
+        /// The file.
+        file: String,
+        /// What the reader found.
+        message: String,
+    },
+    /// A quantity the fit needs has no variable in a MAT-file.
+    #[error(
+        "{file}: no {quantity} variable (expected a name like '{example}'; found variables: {found})"
+    )]
+    MissingVariable {
+        /// The file.
+        file: String,
+        /// The missing quantity.
+        quantity: &'static str,
+        /// An example of an accepted name.
+        example: &'static str,
+        /// The variables in the file, comma separated.
+        found: String,
+    },
+    /// A MAT-file variable is unusable as a whole (missing unit, wrong class,
+    /// ambiguous name).
+    #[error("{file}: variable '{variable}': {message}")]
+    BadVariable {
+        /// The file.
+        file: String,
+        /// The variable's name.
+        variable: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A value of an array (a MAT-file variable, or an array given to the
+    /// library) is unusable.
+    #[error("{file}: variable '{variable}', element {element}: {message}")]
+    BadElement {
+        /// The file (or `<array>`).
+        file: String,
+        /// The variable or array name.
+        variable: String,
+        /// Element, 1-based.
+        element: usize,
+        /// What is wrong.
+        message: String,
+    },
     /// The data set cannot determine the parameters: too few points, or only one
     /// velocity sign for a two-sided fit.
     #[error("{file}: column '{column}': {message}")]
@@ -81,6 +127,9 @@ pub enum IdentError {
         /// What is missing, with counts and line numbers.
         message: String,
     },
+    /// The fit was stopped by its caller (its progress callback said stop).
+    #[error("the fit was cancelled")]
+    Cancelled,
     /// An option given to a fit is out of range.
     #[error("invalid option: {0}")]
     InvalidOption(String),

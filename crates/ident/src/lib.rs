@@ -1,4 +1,4 @@
-//! fistage-ident: LuGre identification from f_ss(v) curves and FRFs.
+//! fistage-ident: LuGre identification from f_ss(v) curves, FRFs and recorded runs.
 //!
 //! * [`csv_input`] reads lab CSV files (units from column-name suffixes or flags,
 //!   converted to SI);
@@ -7,6 +7,8 @@
 //!   solvers, Clarabel as their fallback, for the robust losses) and a global
 //!   one-dimensional search, with L2, Huber or L1 loss and an asymmetry test;
 //! * [`frf`] fits sigma0, sigma1 + sigma2 (and the mass) to the pre-motion FRF;
+//! * [`record`] fits all six LuGre parameters (and the mass) to a recorded
+//!   run (force command and encoder position) by output error;
 //! * [`uncertainty`] gives 95% intervals and residual statistics;
 //! * [`synth`] makes seeded synthetic data from known parameters;
 //! * [`report`] turns fits into JSON, a table and a scenario override.
@@ -30,6 +32,7 @@ pub mod frf;
 mod linalg;
 mod lm;
 mod qp;
+pub mod record;
 pub mod report;
 pub mod stribeck;
 pub mod synth;

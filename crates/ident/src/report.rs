@@ -55,7 +55,7 @@ impl NotIdentifiable {
 }
 
 /// The parameters among `params` that the data do not determine.
-fn undetermined(params: &[(&str, &ParamReport)]) -> Vec<NotIdentifiable> {
+pub(crate) fn undetermined(params: &[(&str, &ParamReport)]) -> Vec<NotIdentifiable> {
     params
         .iter()
         .filter_map(|(name, p)| {
@@ -102,7 +102,7 @@ impl ParamReport {
         None
     }
 
-    fn new(estimate: &Estimate, unit: &str) -> Self {
+    pub(crate) fn new(estimate: &Estimate, unit: &str) -> Self {
         Self {
             value: estimate.value,
             ci95: estimate.ci95,
@@ -535,7 +535,7 @@ fn join_lines(lines: &[u64]) -> String {
 }
 
 /// Six significant digits, fixed notation for ordinary magnitudes.
-fn sig(x: f64) -> String {
+pub(crate) fn sig(x: f64) -> String {
     if x == 0.0 || !x.is_finite() {
         return format!("{x}");
     }
@@ -553,7 +553,7 @@ fn toml_float(x: f64) -> String {
     format!("{x:?}")
 }
 
-fn comment(text: &str) -> String {
+pub(crate) fn comment(text: &str) -> String {
     text.replace(['\n', '\r'], " ")
 }
 
@@ -657,7 +657,7 @@ pub fn frf_override(
 /// The `[overrides.<element>]` table, written by the TOML serializer (so no
 /// element name can break it). Each value passes the parameter table's rule
 /// for its LuGre key, or it is left out with a comment saying why.
-fn write_override(
+pub(crate) fn write_override(
     out: &mut String,
     element: &str,
     params: &[(&str, &ParamReport)],

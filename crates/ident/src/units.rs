@@ -14,6 +14,8 @@
 //! | magnitude | `m/N`, `mm/N`, `um/N`, `nm/N`, `dB` (20 log10 of the magnitude in m/N) |
 //! | phase | `deg`, `rad` |
 //! | real and imaginary parts | `m/N`, `mm/N`, `um/N`, `nm/N` |
+//! | time (records) | `s`, `ms`, `us` |
+//! | position (records) | `m`, `mm`, `um`, `nm` |
 
 use std::f64::consts::PI;
 use std::fmt;
@@ -35,6 +37,10 @@ pub enum Quantity {
     RealPart,
     /// Imaginary part of G, SI unit m/N.
     ImagPart,
+    /// Sample time of a record, SI unit s.
+    Time,
+    /// Position of a record (the encoder), SI unit m.
+    Position,
 }
 
 /// How a number in a file becomes an SI number.
@@ -68,6 +74,19 @@ const FORCE_UNITS: UnitTable = &[
     (&["n"], "N", Conversion::Scale(1.0)),
     (&["mn"], "mN", Conversion::Scale(1e-3)),
     (&["kn"], "kN", Conversion::Scale(1e3)),
+];
+
+const TIME_UNITS: UnitTable = &[
+    (&["s", "sec"], "s", Conversion::Scale(1.0)),
+    (&["ms"], "ms", Conversion::Scale(1e-3)),
+    (&["us"], "us", Conversion::Scale(1e-6)),
+];
+
+const POSITION_UNITS: UnitTable = &[
+    (&["m"], "m", Conversion::Scale(1.0)),
+    (&["mm"], "mm", Conversion::Scale(1e-3)),
+    (&["um"], "um", Conversion::Scale(1e-6)),
+    (&["nm"], "nm", Conversion::Scale(1e-9)),
 ];
 
 const FREQUENCY_UNITS: UnitTable = &[
@@ -115,6 +134,8 @@ impl Quantity {
             Self::Phase => "phase",
             Self::RealPart => "real part",
             Self::ImagPart => "imaginary part",
+            Self::Time => "time",
+            Self::Position => "position",
         }
     }
 
@@ -128,6 +149,8 @@ impl Quantity {
             Self::Phase => "phase_deg",
             Self::RealPart => "re_G_m_per_N",
             Self::ImagPart => "im_G_m_per_N",
+            Self::Time => "t_s",
+            Self::Position => "x_nm",
         }
     }
 
@@ -138,6 +161,8 @@ impl Quantity {
             Self::Force => &[
                 "friction_force",
                 "servo_force",
+                "f_servo",
+                "f_cmd",
                 "friction",
                 "force",
                 "f_ss",
@@ -149,6 +174,8 @@ impl Quantity {
             Self::Phase => &["phase_g", "g_phase", "arg_g", "phase", "angle"],
             Self::RealPart => &["real_g", "re_g", "g_re", "real", "re"],
             Self::ImagPart => &["imag_g", "im_g", "g_im", "imag", "im"],
+            Self::Time => &["time", "t"],
+            Self::Position => &["position", "pos", "encoder", "x_table", "x"],
         }
     }
 
@@ -161,6 +188,8 @@ impl Quantity {
             Self::Magnitude => "--mag-unit",
             Self::Phase => "--phase-unit",
             Self::RealPart | Self::ImagPart => "--response-unit",
+            Self::Time => "--time-unit",
+            Self::Position => "--position-unit",
         }
     }
 
@@ -172,6 +201,8 @@ impl Quantity {
             Self::Magnitude => MAGNITUDE_UNITS,
             Self::Phase => PHASE_UNITS,
             Self::RealPart | Self::ImagPart => COMPLIANCE_UNITS,
+            Self::Time => TIME_UNITS,
+            Self::Position => POSITION_UNITS,
         }
     }
 

@@ -94,7 +94,7 @@ pub use elements::{
 pub use equilibrium::{EquilibriumError, EquilibriumKind};
 pub use error::LoadError;
 pub use linearize::Tangent;
-pub use lugre::{InvalidLugreParameter, LugreKey, LugreParams};
+pub use lugre::{InvalidLugreParameter, LugreKey, LugreOf, LugreParams};
 pub use model::Model;
 pub use parameter::Parameter;
 pub use reference::{Reference, ReferenceSample};

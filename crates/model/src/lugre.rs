@@ -234,21 +234,11 @@ impl LugreParams {
         self.force_and_z_rate_of(v, z)
     }
 
-    /// [`Self::force_and_z_rate`] for any [`Scalar`] (dual numbers differentiate it).
+    /// [`Self::force_and_z_rate`] for any [`Scalar`] (dual numbers differentiate it
+    /// with respect to the state).
     #[inline]
-    ///
-    /// The operations are ordered for a short dependency chain (an
-    /// integrator's stages wait on each other): the exponential starts
-    /// without a division, and everything that does not need the Stribeck
-    /// level is ready before it.
     pub fn force_and_z_rate_of<S: Scalar>(&self, v: S, z: S) -> (S, S) {
-        let r = v * S::constant(1.0 / self.v_s);
-        let level = S::constant(self.f_c) + S::constant(self.f_s - self.f_c) * (-(r * r)).exp();
-        let z_dot = v - kink_abs(v) * S::constant(self.sigma0) * z / level;
-        let force = S::constant(self.sigma0) * z
-            + S::constant(self.sigma2) * v
-            + S::constant(self.sigma1) * z_dot;
-        (force, z_dot)
+        LugreOf::constant(self).force_and_z_rate(v, z)
     }
 
     /// Steady-state friction at constant sliding velocity v (paper Eq. 30), N.
@@ -260,6 +250,55 @@ impl LugreParams {
     /// The bristle deflection of the slipping equilibrium, `sgn(v) g(v)` (paper Eq. 29), m.
     pub fn steady_state_z(&self, v: f64) -> f64 {
         self.g(v) * v.signum_or_zero()
+    }
+}
+
+/// The LuGre law with parameters of any [`Scalar`]: dual parameters give the
+/// derivatives of the force and the bristle rate with respect to a parameter
+/// (the record identification's sensitivities). [`LugreParams`] evaluates
+/// through it, so the law is written once.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LugreOf<S> {
+    /// Bristle stiffness sigma0, N/m.
+    pub sigma0: S,
+    /// Bristle damping sigma1, N s/m.
+    pub sigma1: S,
+    /// Viscous friction sigma2, N s/m.
+    pub sigma2: S,
+    /// Coulomb level f_C, N.
+    pub f_c: S,
+    /// Static level f_S, N.
+    pub f_s: S,
+    /// Stribeck velocity v_s, m/s.
+    pub v_s: S,
+}
+
+impl<S: Scalar> LugreOf<S> {
+    /// The parameters of `params`, constant.
+    pub fn constant(params: &LugreParams) -> Self {
+        Self {
+            sigma0: S::constant(params.sigma0),
+            sigma1: S::constant(params.sigma1),
+            sigma2: S::constant(params.sigma2),
+            f_c: S::constant(params.f_c),
+            f_s: S::constant(params.f_s),
+            v_s: S::constant(params.v_s),
+        }
+    }
+
+    /// Friction force on the contact (opposing positive `v`) and the bristle rate.
+    ///
+    /// The operations are ordered for a short dependency chain (an
+    /// integrator's stages wait on each other): the exponential starts
+    /// without a division, and everything that does not need the Stribeck
+    /// level is ready before it.
+    #[inline]
+    pub fn force_and_z_rate(&self, v: S, z: S) -> (S, S) {
+        let r = v * (S::one() / self.v_s);
+        let level = self.f_c + (self.f_s - self.f_c) * (-(r * r)).exp();
+        let z_dot = v - kink_abs(v) * self.sigma0 * z / level;
+        let force = self.sigma0 * z + self.sigma2 * v + self.sigma1 * z_dot;
+        (force, z_dot)
     }
 }
 

@@ -42,6 +42,7 @@ mod driver;
 pub mod engine;
 pub mod excitation;
 pub mod matfile;
+pub mod matread;
 pub mod metrics;
 pub mod rapier_engine;
 pub mod rosenbrock;

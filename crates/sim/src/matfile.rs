@@ -93,6 +93,16 @@ impl SignalTable {
     }
 }
 
+/// Writes named column vectors as a version 7 MAT-file; the names must be
+/// valid MATLAB identifiers (see [`matlab_names`]).
+pub fn write_columns<W: Write>(out: &mut W, columns: &[(&str, &[f64])]) -> io::Result<()> {
+    out.write_all(&header())?;
+    for (name, column) in columns {
+        write_variable(out, name, &Value::Column(column))?;
+    }
+    Ok(())
+}
+
 /// The 128-byte header.
 fn header() -> Vec<u8> {
     let text = format!(

@@ -1,0 +1,335 @@
+//! `fistage identify record` and `fistage identify simulate-record`: all six
+//! LuGre parameters (and the mass) from a recorded run, and lab-style
+//! records from any stage.
+//!
+//! ```text
+//! fistage identify record DATA [--mass M | --fit-mass] [--json] [--out DIR]
+//!                              [--segments FILE] [--loss l2|huber] [--horizon S|whole]
+//! fistage identify simulate-record ROBOT_OR_SCENARIO --out DATA.csv|DATA.mat [--seed N]
+//!                              [--exact] [--quantum M] [--noise M] [--disturbance N]
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use clap::{Args, ValueEnum};
+use fistage_analysis::lab::LabStage;
+use fistage_analysis::record_lab::RecordLab;
+use fistage_ident::record::{
+    FitProgress, LabErrors, MassChoice, Record, RecordFit, RecordOptions, RecordReport,
+    SegmentChoice, fit_record, read_record, read_segments, record_fit_csv, record_override,
+};
+use fistage_ident::{Loss, Quantity, UnitOverrides};
+use fistage_plot::{Figure, Panel, Series, write_figure};
+
+use crate::identify::{
+    OutputArgs, SimulateArgs, check_element, nothing_written, print_report, refuse_undetermined,
+    unit_flag,
+};
+use crate::output::OutputFolder;
+
+/// The input conventions, for `--help`.
+const CONVENTIONS: &str = "\
+Input conventions: columns (CSV) or variables (MAT-file, version 6 or 7 as MATLAB's \
+`save` writes by default) are found by name and unit suffix: time `t_s` (or `t_ms`), \
+force `f_servo_N` (or `force_N`), position `x_nm` (or `x_um`, `x_mm`, `x_m`). \
+The force is held over each sample interval (zero-order hold: f[k] acts on [t_k, t_k+1)); \
+the position is sampled at t_k before f[k] acts; the stage starts at rest with relaxed \
+bristles unless --start-velocity / --start-bristle say otherwise; encoders are quantised \
+(1 nm is typical) and the fit expects that.";
+
+#[derive(Clone, Copy, ValueEnum)]
+enum RecordLoss {
+    L2,
+    Huber,
+}
+
+/// Arguments of `fistage identify record`.
+#[derive(Args)]
+#[command(after_help = CONVENTIONS)]
+pub struct RecordArgs {
+    /// The record: CSV or `.mat` with time, force and position.
+    data: PathBuf,
+    /// Known moving mass, kg.
+    #[arg(long, value_name = "KG", conflicts_with = "fit_mass")]
+    mass: Option<f64>,
+    /// Fit the mass (the default when --mass is not given).
+    #[arg(long)]
+    fit_mass: bool,
+    /// Segments table (CSV `start_s,end_s[,kind]`); without it, rests of zero
+    /// force of 50 ms or more split the record.
+    #[arg(long, value_name = "FILE")]
+    segments: Option<PathBuf>,
+    /// The loss.
+    #[arg(long, value_enum, default_value = "l2")]
+    loss: RecordLoss,
+    /// How often the simulated position is re-anchored to the encoder, s, or
+    /// `whole` for a pure output error (re-anchored only where a motion
+    /// follows a rest). 10 ms keeps an unmeasured force from bending the fit.
+    #[arg(long, value_name = "S|whole", default_value = "0.01")]
+    horizon: String,
+    /// Relative tolerance of the plant simulation.
+    #[arg(long, default_value_t = 1e-8)]
+    rtol: f64,
+    /// Velocity at the first sample, m/s.
+    #[arg(long, value_name = "M_PER_S", default_value_t = 0.0)]
+    start_velocity: f64,
+    /// Bristle deflection at the first sample, m.
+    #[arg(long, value_name = "M", default_value_t = 0.0)]
+    start_bristle: f64,
+    /// Unit of a time column named without one (s, ms, us).
+    #[arg(long, value_name = "UNIT")]
+    time_unit: Option<String>,
+    /// Unit of a force column named without one (N, mN).
+    #[arg(long, value_name = "UNIT")]
+    force_unit: Option<String>,
+    /// Unit of a position column named without one (m, mm, um, nm).
+    #[arg(long, value_name = "UNIT")]
+    position_unit: Option<String>,
+    #[command(flatten)]
+    output: OutputArgs,
+}
+
+/// Arguments of `fistage identify simulate-record`.
+#[derive(Args)]
+pub struct SimulateRecordArgs {
+    #[command(flatten)]
+    common: SimulateArgs,
+    /// Encoder step, m.
+    #[arg(long, value_name = "M", default_value_t = 1e-9)]
+    quantum: f64,
+    /// Standard deviation of white position noise, m.
+    #[arg(long, value_name = "M", default_value_t = 0.0)]
+    noise: f64,
+    /// RMS of an unmeasured force disturbance (low-pass noise, 50 ms), N.
+    #[arg(long, value_name = "N", default_value_t = 0.0)]
+    disturbance: f64,
+    /// Sample rate, Hz.
+    #[arg(long, value_name = "HZ", default_value_t = 10_000.0)]
+    rate: f64,
+}
+
+/// Runs `fistage identify record`.
+pub fn run_record(args: &RecordArgs) -> Result<()> {
+    check_element(&args.output)?;
+    let units = UnitOverrides {
+        time: unit_flag(Quantity::Time, &args.time_unit)?,
+        force: unit_flag(Quantity::Force, &args.force_unit)?,
+        position: unit_flag(Quantity::Position, &args.position_unit)?,
+        ..UnitOverrides::default()
+    };
+    let mut record = read_record(&args.data, &units)?;
+    record.start.velocity = args.start_velocity;
+    record.start.bristle = args.start_bristle;
+    record.check()?;
+    let segments = match &args.segments {
+        Some(path) => SegmentChoice::Given(read_segments(path, &record)?),
+        None => SegmentChoice::Detect,
+    };
+    let horizon = match args.horizon.as_str() {
+        "whole" => None,
+        text => Some(
+            text.parse::<f64>()
+                .ok()
+                .filter(|h| h.is_finite() && *h > 0.0)
+                .with_context(|| {
+                    format!("--horizon: '{text}' is neither a positive number of s nor 'whole'")
+                })?,
+        ),
+    };
+    let options = RecordOptions {
+        mass: args.mass.map_or(MassChoice::Fit, MassChoice::Known),
+        loss: match args.loss {
+            RecordLoss::L2 => Loss::L2,
+            RecordLoss::Huber => Loss::Huber,
+        },
+        rtol: args.rtol,
+        segments,
+        horizon,
+        ..RecordOptions::default()
+    };
+    let bar = crate::progress::bar("fitting the record");
+    let mut iterations = 0usize;
+    let fit = fit_record(&record, &options, &mut |p: &FitProgress| {
+        iterations += usize::from(p.iteration > 0);
+        // The fraction of the most iterations a fit of this kind has needed.
+        crate::progress::set_fraction(&bar, iterations as f64 / 30.0);
+        if p.rms.is_finite() {
+            bar.set_message(format!(
+                "fitting: iteration {iterations}, rms {:.3e} m",
+                p.rms
+            ));
+        }
+        true
+    })?;
+    bar.finish_and_clear();
+    let report = RecordReport::new(&record, &fit);
+    let json = serde_json::to_string_pretty(&report)?;
+    let verdict = refuse_undetermined(&args.output, &report.not_identifiable);
+    if let (Some(target), true) = (&args.output.out, verdict.is_ok()) {
+        let folder = OutputFolder::begin(target, args.output.force)?;
+        write_record_outputs(folder.path(), &record, &fit, &report, &json, &args.output)?;
+        folder.commit()?;
+    }
+    print_report(args.output.json, &json, &report.table());
+    verdict.map_err(|e| nothing_written(e, &args.output))
+}
+
+fn write_record_outputs(
+    dir: &Path,
+    record: &Record,
+    fit: &RecordFit,
+    report: &RecordReport,
+    json: &str,
+    output: &OutputArgs,
+) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))?;
+    for (name, text) in [
+        ("fit.json", format!("{json}\n")),
+        ("override.toml", record_override(&output.element, report)),
+        ("data_vs_fit.csv", record_fit_csv(record, fit)),
+    ] {
+        let path = dir.join(name);
+        std::fs::write(&path, text).with_context(|| format!("{}: cannot write", path.display()))?;
+    }
+    let figure = fit_figure(record, fit);
+    for name in ["fit.svg", "fit.png"] {
+        write_figure(&figure, &dir.join(name))?;
+    }
+    Ok(())
+}
+
+/// Measured and simulated position (mm), the residual (nm) and the force (N)
+/// against time.
+fn fit_figure(record: &Record, fit: &RecordFit) -> Figure {
+    let t = record.time.clone();
+    let mm = |x: &[f64]| x.iter().map(|v| v * 1e3).collect::<Vec<f64>>();
+    let residual: Vec<f64> = fit
+        .simulated
+        .iter()
+        .zip(&record.position)
+        .map(|(s, m)| (s - m) * 1e9)
+        .collect();
+    Figure::new(
+        format!("Record fit: {}", short_name(&record.source)),
+        "time (s)",
+        vec![
+            Panel::new(
+                "position (mm)",
+                vec![
+                    Series::line("measured", t.clone(), mm(&record.position)),
+                    Series::line("simulated (fit)", t.clone(), mm(&fit.simulated)),
+                ],
+            ),
+            Panel::new(
+                "residual (nm)",
+                vec![Series::line("simulated - measured", t.clone(), residual)],
+            ),
+            Panel::new(
+                "force (N)",
+                vec![Series::line("force command", t, record.force.clone())],
+            ),
+        ],
+    )
+}
+
+fn short_name(source: &str) -> &str {
+    Path::new(source)
+        .file_name()
+        .and_then(|n| n.to_str())
+        .unwrap_or(source)
+}
+
+/// Runs `fistage identify simulate-record`.
+pub fn simulate_record(args: &SimulateRecordArgs) -> Result<()> {
+    for (flag, value) in [
+        ("--quantum", args.quantum),
+        ("--noise", args.noise),
+        ("--disturbance", args.disturbance),
+    ] {
+        if !(value.is_finite() && value >= 0.0) {
+            bail!("{flag} must be a number >= 0, got {value}");
+        }
+    }
+    if !(args.rate.is_finite() && args.rate > 0.0 && args.rate <= 1e7) {
+        bail!("--rate must be in (0, 1e7] Hz, got {}", args.rate);
+    }
+    let common = &args.common;
+    let stage = LabStage::load(&common.stage)?;
+    let mut lab = RecordLab::new(common.seed);
+    lab.dt = 1.0 / args.rate;
+    lab.errors = if common.exact {
+        LabErrors::exact()
+    } else {
+        LabErrors {
+            quantum: args.quantum,
+            position_noise: args.noise,
+            disturbance_rms: args.disturbance,
+            seed: common.seed,
+            ..LabErrors::exact()
+        }
+    };
+    let (record, segments) = lab.measure(&stage)?;
+    write_record(&common.out, &record)?;
+    let segments_path = common.out.with_extension("segments.csv");
+    let mut table = String::from("start_s,end_s,kind\n");
+    for s in segments.iter().filter(|s| !s.is_rest()) {
+        let end = record
+            .time
+            .get(s.end)
+            .copied()
+            .unwrap_or(record.time[record.len() - 1]);
+        table += &format!("{},{},{}\n", record.time[s.start], end, s.kind);
+    }
+    std::fs::write(&segments_path, table)
+        .with_context(|| format!("{}: cannot write", segments_path.display()))?;
+    let p = stage.friction();
+    println!(
+        "wrote {} samples ({:.2} s at {} Hz) to {} and its segments to {}",
+        record.len(),
+        record.duration(),
+        args.rate,
+        common.out.display(),
+        segments_path.display()
+    );
+    let truth = serde_json::json!({
+        "f_c": p.f_c, "f_s": p.f_s, "v_s": p.v_s, "sigma0": p.sigma0,
+        "sigma1": p.sigma1, "sigma2": p.sigma2, "mass": stage.moving_mass(),
+    });
+    println!(
+        "true parameters of {} ({}): {truth}",
+        stage.friction_name(),
+        stage.source()
+    );
+    Ok(())
+}
+
+/// Writes a record as CSV (`t_s,f_servo_N,x_m`) or, for a `.mat` name, as a
+/// version 7 MAT-file with the same variable names.
+fn write_record(path: &Path, record: &Record) -> Result<()> {
+    let is_mat = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("mat"));
+    let result = if is_mat {
+        let mut bytes = Vec::new();
+        fistage_sim::matfile::write_columns(
+            &mut bytes,
+            &[
+                ("t_s", &record.time),
+                ("f_servo_N", &record.force),
+                ("x_m", &record.position),
+            ],
+        )
+        .and_then(|()| std::fs::write(path, bytes))
+    } else {
+        let mut text = String::from("t_s,f_servo_N,x_m\n");
+        for k in 0..record.len() {
+            text += &format!(
+                "{},{},{}\n",
+                record.time[k], record.force[k], record.position[k]
+            );
+        }
+        std::fs::write(path, text)
+    };
+    result.with_context(|| format!("{}: cannot write", path.display()))
+}

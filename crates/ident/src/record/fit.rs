@@ -1,0 +1,629 @@
+//! The output-error fit of a record: all six LuGre parameters (and the mass)
+//! by minimising the misfit of the simulated position to the encoder.
+//!
+//! * Parameters are fitted as logarithms (so they stay positive), with
+//!   f_S >= f_C kept by projection.
+//! * Levenberg-Marquardt on the exact forward sensitivities of
+//!   [`super::plant`]; a trial step needs only the plain simulation.
+//! * Continuation: first with position and velocity re-anchored to the
+//!   encoder every 2 ms (nearly an equation error: a start 50% off in
+//!   every parameter comes back), then the output error with the position
+//!   re-anchored every horizon (10 ms by default, see
+//!   [`RecordOptions::horizon`]).
+//! * The start is [`super::start::estimate_start`] (nothing is asked of the
+//!   user), refined by the best of a few presliding variants, since sigma0
+//!   and sigma1 are the least certain first estimates.
+//! * Loss L2, or Huber's with its threshold at 1.345 robust scales.
+//! * Intervals: the residuals of a record are correlated (quantisation,
+//!   unmeasured forces), so Jacobian-only intervals come out far too narrow.
+//!   The covariance is the cluster sandwich `H^-1 (sum_b g_b g_b^T) H^-1`
+//!   with `g_b` the score of block `b` (0.1 s blocks with a horizon; without
+//!   one a segment with its rest, or one of 20 equal blocks when the record
+//!   has fewer than 8 segments), and Student's t with (blocks - 1) degrees
+//!   of freedom. The Jacobian-only standard errors are kept alongside for
+//!   comparison. On records with an unmeasured force the sandwich is far
+//!   closer than the Jacobian-only intervals but still too narrow for the
+//!   friction levels (RESULTS.md gives the measured coverage).
+
+use nalgebra::{DMatrix, DVector};
+
+use super::data::Record;
+use super::plant::{Anchors, PlantTolerance, RecordParam, Simulated, Theta, simulate};
+use super::segments::{Segment, anchors, blocks, detect_segments};
+use super::start::{StartEstimate, derivatives, estimate_start};
+use crate::error::{IdentError, Result};
+use crate::stribeck::Loss;
+use crate::uncertainty::{Estimate, ResidualStats, mad_scale, t95};
+
+/// Whether the mass is known or fitted.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum MassChoice {
+    /// Known, kg.
+    Known(f64),
+    /// Fitted with the friction.
+    Fit,
+}
+
+/// Where the segments come from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SegmentChoice {
+    /// Found from the force (rests of zero force).
+    Detect,
+    /// Given (a segments table).
+    Given(Vec<Segment>),
+    /// None: the whole record is one simulation and blocks are equal.
+    Whole,
+}
+
+/// Options of a record fit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordOptions {
+    /// The mass.
+    pub mass: MassChoice,
+    /// The loss (L2 or Huber).
+    pub loss: Loss,
+    /// Relative tolerance of the plant simulation.
+    pub rtol: f64,
+    /// Most Levenberg-Marquardt iterations.
+    pub max_iterations: usize,
+    /// A start to use instead of the one found from the record (tests).
+    pub start: Option<Theta>,
+    /// The segments.
+    pub segments: SegmentChoice,
+    /// The fit's horizon, s: the simulated position is re-anchored to the
+    /// encoder this often (velocity and bristle run free through the whole
+    /// record). An unmeasured force makes the position drift without bound
+    /// over a long motion, and a pure output error then bends the
+    /// parameters to follow the drift; a horizon of 10 ms cuts the bias on a
+    /// disturbed record several times and changes nothing on a clean one.
+    /// `None`: pure output error, re-anchored only where a motion follows a
+    /// rest.
+    pub horizon: Option<f64>,
+}
+
+impl Default for RecordOptions {
+    fn default() -> Self {
+        Self {
+            mass: MassChoice::Fit,
+            loss: Loss::L2,
+            rtol: 1e-8,
+            max_iterations: 100,
+            start: None,
+            segments: SegmentChoice::Detect,
+            horizon: Some(10e-3),
+        }
+    }
+}
+
+/// Where a fit stands, for a progress display.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FitProgress {
+    /// Iteration (0 while the start is chosen).
+    pub iteration: usize,
+    /// The most iterations.
+    pub max_iterations: usize,
+    /// RMS position residual, m.
+    pub rms: f64,
+}
+
+/// A fitted record.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordFit {
+    /// The fitted parameters (the mass as given when it is known).
+    pub theta: Theta,
+    /// The parameters that were fitted.
+    pub free: Vec<RecordParam>,
+    /// Every parameter with its interval (the mass exact when known).
+    pub estimates: Vec<(RecordParam, Estimate)>,
+    /// Jacobian-only (independent residuals) standard errors of the free
+    /// parameters, for comparison with the honest ones.
+    pub iid_std_errors: Vec<Option<f64>>,
+    /// The first estimates from the record.
+    pub start: StartEstimate,
+    /// The parameters the iterations started from (the best presliding variant).
+    pub refined_start: Theta,
+    /// Position residual statistics, m.
+    pub residuals: ResidualStats,
+    /// The simulated position at every sample, m.
+    pub simulated: Vec<f64>,
+    /// The segments used.
+    pub segments: Vec<Segment>,
+    /// Number of residual blocks of the interval estimate.
+    pub blocks: usize,
+    /// Levenberg-Marquardt iterations.
+    pub iterations: usize,
+    /// Plant right-hand-side evaluations in all.
+    pub rhs_evaluations: u64,
+    /// The loss.
+    pub loss: Loss,
+}
+
+impl RecordFit {
+    /// The estimate of one parameter.
+    pub fn estimate(&self, param: RecordParam) -> Estimate {
+        self.estimates
+            .iter()
+            .find(|(p, _)| *p == param)
+            .map_or(Estimate::exact(self.theta.get(param)), |(_, e)| *e)
+    }
+}
+
+/// The misfit of one simulation.
+struct Misfit {
+    sim: Simulated,
+    residual: Vec<f64>,
+    cost: f64,
+}
+
+/// Fits `record`; `progress` is told of every iteration and stops the fit
+/// (with [`IdentError::Cancelled`]) by returning false.
+pub fn fit_record(
+    record: &Record,
+    options: &RecordOptions,
+    progress: &mut dyn FnMut(&FitProgress) -> bool,
+) -> Result<RecordFit> {
+    record.check()?;
+    if options.loss == Loss::L1 {
+        return Err(IdentError::InvalidOption(
+            "a record fit takes loss l2 or huber".into(),
+        ));
+    }
+    if let Some(h) = options.horizon
+        && !(h.is_finite() && h > 0.0)
+    {
+        return Err(IdentError::InvalidOption(format!(
+            "the horizon must be a positive number of seconds, got {h}"
+        )));
+    }
+    if !(options.rtol >= 1e-14 && options.rtol < 1e-2) {
+        return Err(IdentError::InvalidOption(format!(
+            "rtol {} is outside [1e-14, 1e-2)",
+            options.rtol
+        )));
+    }
+    let known_mass = match options.mass {
+        MassChoice::Known(m) if m.is_finite() && m > 0.0 => Some(m),
+        MassChoice::Known(m) => {
+            return Err(IdentError::InvalidOption(format!(
+                "the mass must be a positive number of kg, got {m}"
+            )));
+        }
+        MassChoice::Fit => None,
+    };
+    let start = estimate_start(record, known_mass)?;
+    let free: Vec<RecordParam> = RecordParam::ALL
+        .iter()
+        .copied()
+        .filter(|p| *p != RecordParam::Mass || known_mass.is_none())
+        .collect();
+    let segments = match &options.segments {
+        SegmentChoice::Detect => detect_segments(record),
+        SegmentChoice::Given(s) => s.clone(),
+        SegmentChoice::Whole => Vec::new(),
+    };
+    let anchors = anchors(&segments);
+    let mut first = options.start.unwrap_or(start.theta);
+    if let Some(m) = known_mass {
+        first.0[RecordParam::Mass.index()] = m;
+    }
+    // A start on the bound f_S = f_C leaves v_s without influence.
+    let (fc, fs) = (RecordParam::FC.index(), RecordParam::FS.index());
+    first.0[fs] = first.0[fs].max(1.05 * first.0[fc]);
+    let problem = Problem {
+        record,
+        free: &free,
+        anchors: Anchors {
+            samples: &anchors,
+            velocity: None,
+        },
+        loss: options.loss,
+        rtol: options.rtol,
+        center: first,
+    };
+    if !progress(&FitProgress {
+        iteration: 0,
+        max_iterations: options.max_iterations,
+        rms: f64::NAN,
+    }) {
+        return Err(IdentError::Cancelled);
+    }
+    // Continuation: first with the simulated position re-anchored to the
+    // encoder every 10 ms, where the misfit is nearly the velocity's and a
+    // far start cannot drift into another basin; then the output error.
+    let velocity = derivatives(record).velocity;
+    let horizons: Vec<Vec<usize>> = [2e-3]
+        .iter()
+        .map(|&h| periodic_anchors(record, &anchors, h))
+        .collect();
+    let short = |samples| Problem {
+        anchors: Anchors {
+            samples,
+            velocity: Some(&velocity),
+        },
+        ..problem
+    };
+    let refined_start = if options.start.is_some() {
+        first
+    } else {
+        short(&horizons[0]).best_variant(first)?
+    };
+    let (mut theta, mut iterations, mut rhs_evaluations) = (refined_start, 0, 0);
+    for samples in &horizons {
+        let stage =
+            short(samples).levenberg_marquardt(theta, options.max_iterations, 1e-6, progress)?;
+        theta = stage.theta;
+        iterations += stage.iterations;
+        rhs_evaluations += stage.rhs_evaluations;
+    }
+    let final_anchors = match options.horizon {
+        Some(h) => periodic_anchors(record, &anchors, h),
+        None => anchors.clone(),
+    };
+    let problem = Problem {
+        anchors: Anchors {
+            samples: &final_anchors,
+            velocity: None,
+        },
+        ..problem
+    };
+    let mut outcome =
+        problem.levenberg_marquardt(theta, options.max_iterations, 1e-13, progress)?;
+    outcome.iterations += iterations;
+    outcome.rhs_evaluations += rhs_evaluations;
+    let block_ranges = match options.horizon {
+        Some(_) => equal_blocks(record, BLOCK_DURATION),
+        None => residual_blocks(&segments, record.len()),
+    };
+    let (estimates, iid) = problem.intervals(&outcome, &block_ranges, known_mass);
+    let residuals: Vec<f64> = outcome.misfit.residual.clone();
+    let stats = ResidualStats::new(&residuals, &record.position, &record.rows, free.len());
+    Ok(RecordFit {
+        theta: outcome.theta,
+        free,
+        estimates,
+        iid_std_errors: iid,
+        start,
+        refined_start,
+        residuals: stats,
+        simulated: outcome.misfit.sim.position,
+        segments,
+        blocks: block_ranges.len(),
+        iterations: outcome.iterations,
+        rhs_evaluations: outcome.rhs_evaluations,
+        loss: options.loss,
+    })
+}
+
+/// `anchors` and a sample every `interval` seconds, sorted.
+fn periodic_anchors(record: &Record, anchors: &[usize], interval: f64) -> Vec<usize> {
+    let every = ((interval / record.sample_interval()).round() as usize).max(1);
+    let mut out: Vec<usize> = (every..record.len()).step_by(every).collect();
+    out.extend_from_slice(anchors);
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// Length of a residual block when the position is re-anchored every
+/// horizon, s: ten horizons, and twice the correlation time of the
+/// disturbances the tests use.
+const BLOCK_DURATION: f64 = 0.1;
+
+/// Consecutive blocks of `duration` seconds.
+fn equal_blocks(record: &Record, duration: f64) -> Vec<(usize, usize)> {
+    let n = record.len();
+    let len = ((duration / record.sample_interval()) as usize).clamp(1, n);
+    (0..n).step_by(len).map(|a| (a, (a + len).min(n))).collect()
+}
+
+/// Blocks of the interval estimate without a horizon: segment blocks when there are at least
+/// 8, else 20 equal blocks.
+fn residual_blocks(segments: &[Segment], n: usize) -> Vec<(usize, usize)> {
+    let from_segments = blocks(segments);
+    if from_segments.len() >= 8 {
+        return from_segments;
+    }
+    let count = 20.min(n / 10).max(2);
+    (0..count)
+        .map(|b| (b * n / count, (b + 1) * n / count))
+        .collect()
+}
+
+/// The result of the iterations.
+struct Outcome {
+    theta: Theta,
+    misfit: Misfit,
+    iterations: usize,
+    rhs_evaluations: u64,
+}
+
+/// What every simulation of one fit shares.
+#[derive(Clone, Copy)]
+struct Problem<'a> {
+    record: &'a Record,
+    free: &'a [RecordParam],
+    anchors: Anchors<'a>,
+    loss: Loss,
+    rtol: f64,
+    /// The start: every parameter stays within a factor [`BOX`] of it.
+    center: Theta,
+}
+
+/// How far from the start a parameter may go: a factor of 100 either way
+/// (the first estimates from a record are far closer; the box keeps a far
+/// start from escaping into degenerate directions such as f_S -> inf with
+/// v_s -> 0, and a fit that ends on it says so).
+const BOX: f64 = 100.0;
+
+impl Problem<'_> {
+    fn misfit(&self, theta: &Theta, sensitivities: bool, threshold: f64) -> Result<Misfit> {
+        let tolerance = PlantTolerance::for_theta(theta, self.rtol);
+        let sim = simulate(
+            self.record,
+            theta,
+            self.free,
+            sensitivities,
+            &self.anchors,
+            tolerance,
+        )?;
+        let residual: Vec<f64> = sim
+            .position
+            .iter()
+            .zip(&self.record.position)
+            .map(|(s, m)| s - m)
+            .collect();
+        let cost = residual.iter().map(|&r| rho(self.loss, r, threshold)).sum();
+        Ok(Misfit {
+            sim,
+            residual,
+            cost,
+        })
+    }
+
+    /// The start among presliding variants (sigma0 x {1/2, 1, 2}, sigma1 x
+    /// {1/3, 1, 3}) with the least L2 misfit.
+    fn best_variant(&self, theta: Theta) -> Result<Theta> {
+        let mut best = (f64::INFINITY, theta);
+        for s0 in [1.0, 0.5, 2.0] {
+            for s1 in [1.0, 1.0 / 3.0, 3.0] {
+                let mut t = theta;
+                t.0[RecordParam::Sigma0.index()] *= s0;
+                t.0[RecordParam::Sigma1.index()] *= s1;
+                let cost = match self.misfit(&t, false, f64::INFINITY) {
+                    Ok(m) if m.cost.is_finite() => m.cost,
+                    _ => continue,
+                };
+                if cost < best.0 {
+                    best = (cost, t);
+                }
+            }
+        }
+        Ok(best.1)
+    }
+
+    /// Levenberg-Marquardt in the logarithms of the free parameters.
+    fn levenberg_marquardt(
+        &self,
+        start: Theta,
+        max_iterations: usize,
+        converged: f64,
+        progress: &mut dyn FnMut(&FitProgress) -> bool,
+    ) -> Result<Outcome> {
+        let p = self.free.len();
+        let mut theta = start;
+        let mut threshold = f64::INFINITY;
+        let mut current = self.misfit(&theta, true, threshold)?;
+        let mut rhs_evaluations = current.sim.rhs_evaluations;
+        let mut lambda = 1e-3;
+        let mut iterations = 0;
+        while iterations < max_iterations {
+            iterations += 1;
+            if self.loss == Loss::Huber {
+                threshold = 1.345 * mad_scale(&current.residual).max(1e-300);
+                current.cost = current
+                    .residual
+                    .iter()
+                    .map(|&r| rho(self.loss, r, threshold))
+                    .sum();
+            }
+            let (h, g) = normal_equations(&current, p, self.loss, threshold);
+            if !progress(&FitProgress {
+                iteration: iterations,
+                max_iterations,
+                rms: rms(&current.residual),
+            }) {
+                return Err(IdentError::Cancelled);
+            }
+            let mut accepted = false;
+            let mut small_step = false;
+            while lambda < 1e12 {
+                let mut damped = h.clone();
+                for j in 0..p {
+                    damped[(j, j)] += lambda * h[(j, j)].max(1e-300);
+                }
+                let Some(step) = damped.cholesky().map(|c| c.solve(&(-&g))) else {
+                    lambda *= 10.0;
+                    continue;
+                };
+                let longest = step.amax();
+                let step = if longest > 1.0 { step / longest } else { step };
+                let trial = self.apply(&theta, &step);
+                small_step = step.amax() < 1e-9;
+                let trial_misfit = self.misfit(&trial, false, threshold);
+                if let Ok(m) = &trial_misfit {
+                    rhs_evaluations += m.sim.rhs_evaluations;
+                }
+                match trial_misfit {
+                    Ok(m) if m.cost.is_finite() && m.cost < current.cost => {
+                        let relative = (current.cost - m.cost) / current.cost.max(1e-300);
+                        theta = trial;
+                        lambda = (lambda / 3.0).max(1e-12);
+                        accepted = true;
+                        current = self.misfit(&theta, true, threshold)?;
+                        rhs_evaluations += current.sim.rhs_evaluations;
+                        small_step |= relative < converged;
+                        break;
+                    }
+                    _ => {
+                        lambda *= 4.0;
+                        if small_step {
+                            break;
+                        }
+                    }
+                }
+            }
+            if !accepted || small_step {
+                break;
+            }
+        }
+        Ok(Outcome {
+            theta,
+            misfit: current,
+            iterations,
+            rhs_evaluations,
+        })
+    }
+
+    /// `theta * exp(step)` on the free parameters, with f_S >= f_C.
+    fn apply(&self, theta: &Theta, step: &DVector<f64>) -> Theta {
+        let mut out = *theta;
+        for (j, param) in self.free.iter().enumerate() {
+            let i = param.index();
+            let center = self.center.0[i];
+            out.0[i] = (out.0[i] * step[j].exp()).clamp(center / BOX, center * BOX);
+        }
+        let (fc, fs) = (RecordParam::FC.index(), RecordParam::FS.index());
+        out.0[fs] = out.0[fs].max(out.0[fc]);
+        out
+    }
+
+    /// Cluster-sandwich estimates of every parameter, and the Jacobian-only
+    /// standard errors of the free ones.
+    fn intervals(
+        &self,
+        outcome: &Outcome,
+        block_ranges: &[(usize, usize)],
+        known_mass: Option<f64>,
+    ) -> (Vec<(RecordParam, Estimate)>, Vec<Option<f64>>) {
+        let p = self.free.len();
+        let threshold = if self.loss == Loss::Huber {
+            1.345 * mad_scale(&outcome.misfit.residual).max(1e-300)
+        } else {
+            f64::INFINITY
+        };
+        let (h, _) = normal_equations(&outcome.misfit, p, self.loss, threshold);
+        let jac = &outcome.misfit.sim.jacobian;
+        let r = &outcome.misfit.residual;
+        let mut meat = DMatrix::<f64>::zeros(p, p);
+        for &(a, b) in block_ranges {
+            let mut score = DVector::<f64>::zeros(p);
+            for k in a..b {
+                let w = weight(self.loss, r[k], threshold);
+                for j in 0..p {
+                    score[j] += w * r[k] * jac[k * p + j];
+                }
+            }
+            meat += &score * score.transpose();
+        }
+        let g = block_ranges.len() as f64;
+        meat *= g / (g - 1.0).max(1.0);
+        let inverse = scaled_inverse(&h);
+        let sandwich = inverse.as_ref().map(|hi| hi * &meat * hi);
+        let n = r.len() as f64;
+        let s2 = outcome.misfit.residual.iter().map(|v| v * v).sum::<f64>() / (n - p as f64);
+        let t = t95((g - 1.0).max(1.0));
+        let mut estimates = Vec::new();
+        let mut iid = Vec::new();
+        for param in RecordParam::ALL {
+            let value = outcome.theta.get(param);
+            let Some(j) = self.free.iter().position(|q| *q == param) else {
+                estimates.push((param, Estimate::exact(known_mass.unwrap_or(value))));
+                continue;
+            };
+            let se = sandwich
+                .as_ref()
+                .map(|c| c[(j, j)])
+                .filter(|v| v.is_finite() && *v >= 0.0)
+                .map(|v| value * v.sqrt());
+            iid.push(
+                inverse
+                    .as_ref()
+                    .map(|c| c[(j, j)] * s2)
+                    .filter(|v| v.is_finite() && *v >= 0.0)
+                    .map(|v| value * v.sqrt()),
+            );
+            estimates.push((param, Estimate::new(value, se, t, 0.0)));
+        }
+        (estimates, iid)
+    }
+}
+
+/// `H = J^T W J` and `g = J^T W r` of the current misfit.
+fn normal_equations(
+    misfit: &Misfit,
+    p: usize,
+    loss: Loss,
+    threshold: f64,
+) -> (DMatrix<f64>, DVector<f64>) {
+    let mut h = DMatrix::zeros(p, p);
+    let mut g = DVector::zeros(p);
+    let jac = &misfit.sim.jacobian;
+    for (k, &r) in misfit.residual.iter().enumerate() {
+        let row = &jac[k * p..(k + 1) * p];
+        let w = weight(loss, r, threshold);
+        for i in 0..p {
+            g[i] += w * row[i] * r;
+            for j in 0..=i {
+                h[(i, j)] += w * row[i] * row[j];
+            }
+        }
+    }
+    for i in 0..p {
+        for j in 0..i {
+            h[(j, i)] = h[(i, j)];
+        }
+    }
+    (h, g)
+}
+
+/// The inverse of a symmetric positive matrix by Jacobi-scaled Cholesky;
+/// None when it is singular to working precision.
+fn scaled_inverse(h: &DMatrix<f64>) -> Option<DMatrix<f64>> {
+    let p = h.nrows();
+    let d: Vec<f64> = (0..p).map(|i| h[(i, i)].max(0.0).sqrt()).collect();
+    if d.iter().any(|&v| v == 0.0 || !v.is_finite()) {
+        return None;
+    }
+    let scaled = DMatrix::from_fn(p, p, |i, j| h[(i, j)] / (d[i] * d[j]));
+    let eigen = scaled.clone().symmetric_eigen();
+    let (lo, hi) = eigen
+        .eigenvalues
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), &e| (a.min(e), b.max(e)));
+    if lo.is_nan() || lo <= 1e-13 * hi {
+        return None;
+    }
+    let inv = scaled.cholesky()?.inverse();
+    Some(DMatrix::from_fn(p, p, |i, j| inv[(i, j)] / (d[i] * d[j])))
+}
+
+/// The loss of one residual (half the square for L2).
+fn rho(loss: Loss, r: f64, threshold: f64) -> f64 {
+    let a = r.abs();
+    match loss {
+        Loss::Huber if a > threshold => threshold * a - 0.5 * threshold * threshold,
+        _ => 0.5 * r * r,
+    }
+}
+
+/// The IRLS weight of one residual.
+fn weight(loss: Loss, r: f64, threshold: f64) -> f64 {
+    match loss {
+        Loss::Huber if r.abs() > threshold => threshold / r.abs(),
+        _ => 1.0,
+    }
+}
+
+fn rms(r: &[f64]) -> f64 {
+    (r.iter().map(|v| v * v).sum::<f64>() / r.len().max(1) as f64).sqrt()
+}

@@ -1,0 +1,257 @@
+//! The report of a record fit: `fit.json` (the parameters by name, each with
+//! `value`, `ci95`, `std_error` and `unit`, as the other fits name them), a
+//! table for the terminal, `override.toml`, and the measured-against-
+//! simulated CSV.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+use serde::{Deserialize, Serialize};
+
+use super::data::Record;
+use super::fit::RecordFit;
+use super::plant::RecordParam;
+use crate::report::{NotIdentifiable, ParamReport, comment, sig, undetermined, write_override};
+use crate::stribeck::Loss;
+use crate::uncertainty::ResidualStats;
+
+/// The JSON report of `fistage identify record`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RecordReport {
+    /// Always `record`.
+    pub kind: String,
+    /// The data file.
+    pub source: String,
+    /// The model: paper Eq. 31.
+    pub model: String,
+    /// `l2` or `huber`.
+    pub loss: Loss,
+    /// Coulomb friction.
+    pub f_c: ParamReport,
+    /// Static friction.
+    pub f_s: ParamReport,
+    /// Stribeck velocity.
+    pub v_s: ParamReport,
+    /// Bristle stiffness.
+    pub sigma0: ParamReport,
+    /// Bristle damping.
+    pub sigma1: ParamReport,
+    /// Viscous friction.
+    pub sigma2: ParamReport,
+    /// Moving mass (exact when it was given).
+    pub mass: ParamReport,
+    /// Whether the mass was fitted.
+    pub mass_fitted: bool,
+    /// The first estimates found from the record, SI units.
+    pub start: BTreeMap<String, f64>,
+    /// Standard errors if the residuals were independent (Jacobian only),
+    /// for comparison: far too small for a real record.
+    pub iid_std_error: BTreeMap<String, Option<f64>>,
+    /// How the intervals were found.
+    pub interval_method: String,
+    /// Position residual statistics, m.
+    pub residuals: ResidualStats,
+    /// Number of samples, and the record's duration, s.
+    pub samples: usize,
+    /// Duration, s.
+    pub duration: f64,
+    /// Segments (rests and motions) used.
+    pub segments: usize,
+    /// Levenberg-Marquardt iterations.
+    pub iterations: usize,
+    /// Right-hand-side evaluations of the plant in all.
+    pub rhs_evaluations: u64,
+    /// Parameters these data cannot determine (left out of override.toml).
+    pub not_identifiable: Vec<NotIdentifiable>,
+    /// Things the user should know about this fit.
+    pub warnings: Vec<String>,
+}
+
+impl RecordReport {
+    /// The report of a fit of `record`.
+    pub fn new(record: &Record, fit: &RecordFit) -> Self {
+        let param = |p: RecordParam| ParamReport::new(&fit.estimate(p), p.unit());
+        let mass_fitted = fit.free.contains(&RecordParam::Mass);
+        let mut reports: Vec<(&str, ParamReport)> = RecordParam::ALL
+            .iter()
+            .map(|&p| (p.name(), param(p)))
+            .collect();
+        let checked: Vec<(&str, &ParamReport)> = reports
+            .iter()
+            .filter(|(name, _)| mass_fitted || *name != "mass")
+            .map(|(n, p)| (*n, p))
+            .collect();
+        let mut not_identifiable = undetermined(&checked);
+        for (p, value) in RecordParam::ALL.iter().map(|&p| (p, fit.theta.get(p))) {
+            let center = fit.refined_start.get(p);
+            let on_box = value <= center / 99.0 || value >= center * 99.0;
+            if fit.free.contains(&p)
+                && on_box
+                && !not_identifiable.iter().any(|n| n.parameter == p.name())
+            {
+                not_identifiable.push(NotIdentifiable {
+                    parameter: p.name().into(),
+                    reason: format!(
+                        "the fit ran to a factor 100 from its start {}: the record does not \
+                         hold it",
+                        sig(center)
+                    ),
+                });
+            }
+        }
+        let mut warnings: Vec<String> = fit.start.notes.clone();
+        if fit.iterations >= 2 * 100 {
+            warnings.push("the iterations hit their limit".into());
+        }
+        let take = |name: &str, reports: &mut Vec<(&str, ParamReport)>| {
+            let i = reports.iter().position(|(n, _)| *n == name).unwrap_or(0);
+            reports.remove(i).1
+        };
+        Self {
+            kind: "record".into(),
+            source: record.source.clone(),
+            model: "paper Eq. 31: M x'' = -(sigma0 z + sigma1 z' + sigma2 x') + f, LuGre z".into(),
+            loss: fit.loss,
+            f_c: take("f_c", &mut reports),
+            f_s: take("f_s", &mut reports),
+            v_s: take("v_s", &mut reports),
+            sigma0: take("sigma0", &mut reports),
+            sigma1: take("sigma1", &mut reports),
+            sigma2: take("sigma2", &mut reports),
+            mass: take("mass", &mut reports),
+            mass_fitted,
+            start: RecordParam::ALL
+                .iter()
+                .map(|p| (p.name().to_string(), fit.start.theta.get(*p)))
+                .collect(),
+            iid_std_error: fit
+                .free
+                .iter()
+                .zip(&fit.iid_std_errors)
+                .map(|(p, se)| (p.name().to_string(), *se))
+                .collect(),
+            interval_method: format!(
+                "cluster sandwich over {} blocks of consecutive residuals, Student t with {} \
+                 degrees of freedom",
+                fit.blocks,
+                fit.blocks.saturating_sub(1)
+            ),
+            residuals: fit.residuals.clone(),
+            samples: record.len(),
+            duration: record.duration(),
+            segments: fit.segments.len(),
+            iterations: fit.iterations,
+            rhs_evaluations: fit.rhs_evaluations,
+            not_identifiable,
+            warnings,
+        }
+    }
+
+    /// The parameters in the order of [`RecordParam::ALL`].
+    pub fn params(&self) -> [(&'static str, &ParamReport); 7] {
+        [
+            ("f_c", &self.f_c),
+            ("f_s", &self.f_s),
+            ("v_s", &self.v_s),
+            ("sigma0", &self.sigma0),
+            ("sigma1", &self.sigma1),
+            ("sigma2", &self.sigma2),
+            ("mass", &self.mass),
+        ]
+    }
+
+    /// A plain-text table of the fit.
+    pub fn table(&self) -> String {
+        let mut out = format!(
+            "Record fit of {} ({} samples over {:.3} s, {} segments, {} loss)\n",
+            self.source,
+            self.samples,
+            self.duration,
+            self.segments,
+            self.loss.name()
+        );
+        let _ = writeln!(
+            out,
+            "{:<8} {:>13} {:>29} {:>12} {:>12} {:>13}  unit",
+            "param", "value", "95% interval", "std error", "iid s.e.", "start"
+        );
+        for (name, p) in self.params() {
+            let interval = p.ci95.map_or("-".to_string(), |[a, b]| {
+                format!("[{}, {}]", sig(a), sig(b))
+            });
+            let iid = self
+                .iid_std_error
+                .get(name)
+                .copied()
+                .flatten()
+                .map_or("-".into(), sig);
+            let _ = writeln!(
+                out,
+                "{name:<8} {:>13} {interval:>29} {:>12} {iid:>12} {:>13}  {}",
+                sig(p.value),
+                p.std_error.map_or("-".into(), sig),
+                sig(self.start.get(name).copied().unwrap_or(f64::NAN)),
+                p.unit
+            );
+        }
+        let _ = writeln!(
+            out,
+            "position residual: rms {} m, max {} m; {} iterations, {} plant evaluations",
+            sig(self.residuals.rms),
+            sig(self.residuals.max_abs),
+            self.iterations,
+            self.rhs_evaluations
+        );
+        let _ = writeln!(out, "intervals: {}", self.interval_method);
+        for n in &self.not_identifiable {
+            let _ = writeln!(out, "not identifiable: {} ({})", n.parameter, n.reason);
+        }
+        for w in &self.warnings {
+            let _ = writeln!(out, "warning: {w}");
+        }
+        out
+    }
+}
+
+/// The six LuGre parameters as `[overrides.<element>]` (the mass is a
+/// property of the robot file, so it is a comment).
+pub fn record_override(element: &str, report: &RecordReport) -> String {
+    let mut out = format!(
+        "# LuGre friction identified from the record {} (output error, {} loss, {} samples).\n",
+        comment(&report.source),
+        report.loss.name(),
+        report.samples
+    );
+    let _ = writeln!(
+        out,
+        "# Moving mass {} {} ({}).",
+        sig(report.mass.value),
+        report.mass.unit,
+        if report.mass_fitted {
+            "fitted"
+        } else {
+            "given"
+        }
+    );
+    let params = report.params();
+    write_override(&mut out, element, &params[..6], &report.not_identifiable);
+    out
+}
+
+/// `t_s,force_N,measured_m,simulated_m,residual_m` at every sample.
+pub fn record_fit_csv(record: &Record, fit: &RecordFit) -> String {
+    let mut out = String::from("t_s,force_N,measured_m,simulated_m,residual_m\n");
+    for k in 0..record.len() {
+        let (x, s) = (record.position[k], fit.simulated[k]);
+        let _ = writeln!(
+            out,
+            "{},{},{},{},{}",
+            record.time[k],
+            record.force[k],
+            x,
+            s,
+            s - x
+        );
+    }
+    out
+}
