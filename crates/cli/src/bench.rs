@@ -51,6 +51,9 @@ pub struct BenchArgs {
     /// simulated 2 s samples on one and two threads.
     #[arg(long)]
     pub robust: bool,
+    /// Time the record fit (`identify record`) on 7 s records at 10 kHz.
+    #[arg(long)]
+    pub record: bool,
     /// Python with FMPy for the FMU table (default: the test environment's,
     /// `target/fmi-venv/bin/python`, else `python3`).
     #[arg(long)]
@@ -69,7 +72,7 @@ fn fmu_python(args: &BenchArgs) -> PathBuf {
 }
 
 /// CPU time of the calling thread, s.
-fn thread_cpu_time() -> f64 {
+pub(crate) fn thread_cpu_time() -> f64 {
     let mut spec = libc::timespec {
         tv_sec: 0,
         tv_nsec: 0,
@@ -169,6 +172,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     if args.stiffness {
         return stiffness_table(args);
     }
+    if args.record {
+        return crate::bench_record::record_table(args.repeat);
+    }
     if args.robust {
         let scenario = args
             .scenario
@@ -213,6 +219,8 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             )?;
             println!();
             ident_table(args.repeat)?;
+            println!();
+            crate::bench_record::record_table(args.repeat)?;
             println!();
             crate::bench_fmu::fmu_table(&fmu_python(args), args.repeat.min(5))
         }

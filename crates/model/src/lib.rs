@@ -100,7 +100,7 @@ pub use parameter::Parameter;
 pub use reference::{Reference, ReferenceSample};
 pub use robot::{FISTAGE_NS, IsolatorKey, RobotSpec};
 pub use rule::{Rule, RuleViolation};
-pub use scalar::{Dual64, Scalar};
+pub use scalar::{Dual64, DualSVec64, Scalar};
 pub use scenario::{
     ControllerSettings, EngineKind, Gain, OutputFormat, Override, PayloadSettings, RapierSettings,
     Scenario, SolverSettings, Start, StopSettings,

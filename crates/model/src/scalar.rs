@@ -1,10 +1,11 @@
 //! The scalar types the physics is written over: `f64` for simulation and
-//! forward-mode dual numbers ([`Dual64`]) for exact Jacobians. One generic
+//! forward-mode dual numbers ([`Dual64`], and [`DualSVec64`] for several
+//! directions at once) for exact Jacobians and sensitivities. One generic
 //! implementation serves both, so the linearisation differentiates exactly the
 //! code that is simulated.
 
 use nalgebra::RealField;
-pub use num_dual::Dual64;
+pub use num_dual::{Dual64, DualSVec64};
 
 /// A real scalar: `f64` or a dual number carrying one directional derivative.
 pub trait Scalar: RealField + Copy {
@@ -45,6 +46,23 @@ impl Scalar for Dual64 {
     #[inline]
     fn is_exactly_zero(self) -> bool {
         self.re == 0.0 && self.eps == 0.0
+    }
+}
+
+/// A dual number carrying `N` directional derivatives at once (one pass
+/// through the law for all of them: the record fit's sensitivities).
+impl<const N: usize> Scalar for DualSVec64<N> {
+    #[inline]
+    fn value(self) -> f64 {
+        self.re
+    }
+    #[inline]
+    fn constant(value: f64) -> Self {
+        DualSVec64::from_re(value)
+    }
+    #[inline]
+    fn is_exactly_zero(self) -> bool {
+        self.re == 0.0 && self.eps.0.is_none_or(|e| e.iter().all(|&d| d == 0.0))
     }
 }
 

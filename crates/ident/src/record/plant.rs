@@ -14,8 +14,10 @@
 //! control like the states. The LuGre law is [`LugreOf`], the one the
 //! stage models use.
 
-use fistage_model::{Dual64, LugreOf, LugreParams, Scalar};
+use fistage_model::{DualSVec64, LugreOf, LugreParams, Scalar};
 use fistage_sim::dopri::{DormandPrince, OdeSystem, Tolerances};
+use nalgebra::SVector;
+use num_dual::Derivative;
 
 use super::data::Record;
 use crate::error::{IdentError, Result};
@@ -154,22 +156,41 @@ impl OdeSystem for SensitivitySystem<'_> {
     fn rhs(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) {
         let primal = rates(&self.theta, self.force, y[1], y[2]);
         dy[..3].copy_from_slice(&primal);
-        let theta = self.theta.map(Dual64::from_re);
+        if self.free.is_empty() {
+            return;
+        }
+        // One pass with a lane per free parameter: lane j carries
+        // d / d ln(theta_j) (the parameter moves along itself, the state
+        // along its sensitivity).
+        let lanes = |f: &dyn Fn(usize) -> f64| {
+            Derivative::some(SVector::<f64, LANES>::from_fn(|j, _| {
+                if j < self.free.len() { f(j) } else { 0.0 }
+            }))
+        };
+        let mut theta = self.theta.map(Lanes::from_re);
         for (j, param) in self.free.iter().enumerate() {
-            let mut th = theta;
             let i = param.index();
-            // d / d ln(theta_i): the parameter moves along itself.
-            th[i] = Dual64::new(self.theta[i], self.theta[i]);
-            let s = &y[3 + 3 * j..6 + 3 * j];
-            let v = Dual64::new(y[1], s[1]);
-            let z = Dual64::new(y[2], s[2]);
-            let r = rates(&th, self.force, v, z);
-            for (out, value) in dy[3 + 3 * j..6 + 3 * j].iter_mut().zip(r) {
-                *out = value.eps;
+            let mut eps = SVector::<f64, LANES>::zeros();
+            eps[j] = self.theta[i];
+            theta[i].eps = Derivative::some(eps);
+        }
+        let v = Lanes::new(y[1], lanes(&|j| y[4 + 3 * j]));
+        let z = Lanes::new(y[2], lanes(&|j| y[5 + 3 * j]));
+        let r = rates(&theta, self.force, v, z);
+        for (c, value) in r.iter().enumerate() {
+            let eps = value.eps.0.unwrap_or_else(SVector::zeros);
+            for j in 0..self.free.len() {
+                dy[3 + 3 * j + c] = eps[j];
             }
         }
     }
 }
+
+/// Lanes of the sensitivity pass: one per parameter of [`Theta`].
+const LANES: usize = 7;
+
+/// The dual number of the sensitivity pass.
+type Lanes = DualSVec64<LANES>;
 
 /// Integration accuracy of the plant.
 #[derive(Debug, Clone, Copy, PartialEq)]

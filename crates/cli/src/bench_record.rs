@@ -1,0 +1,92 @@
+//! `fistage bench --record`: the record fit of `fistage identify record` on
+//! 7 s lab-style records at 10 kHz (1 nm encoder), one core: Table 1's
+//! stage with the mass fitted, a small stage far from it with the mass
+//! known, and Table 1 with a 0.01 N unmeasured force. Wall and CPU time of
+//! the whole fit (first estimates, continuation, output error, intervals),
+//! its iterations and plant evaluations, and the worst parameter error.
+
+use std::time::Instant;
+
+use fistage_ident::record::{
+    LabErrors, MassChoice, RecordOptions, RecordParam, RecordSynth, Theta, fit_record,
+};
+use fistage_ident::synth::small_stage;
+use fistage_model::LugreParams;
+
+/// Prints the Markdown table; `repeat` fits per case (median).
+pub fn record_table(repeat: usize) -> anyhow::Result<()> {
+    let repeat = repeat.clamp(1, 5);
+    let disturbed = LabErrors {
+        disturbance_rms: 0.01,
+        seed: 7,
+        ..LabErrors::encoder()
+    };
+    let cases = [
+        (
+            "Table 1, mass fitted",
+            LugreParams::paper_table1(),
+            1.5,
+            false,
+            LabErrors::encoder(),
+        ),
+        (
+            "small stage, mass known",
+            small_stage(),
+            0.25,
+            true,
+            LabErrors::encoder(),
+        ),
+        (
+            "Table 1, 0.01 N disturbance",
+            LugreParams::paper_table1(),
+            1.5,
+            false,
+            disturbed,
+        ),
+    ];
+    println!(
+        "Record fit (`fistage identify record`), 7 s at 10 kHz, 1 nm encoder, one core, median of {repeat} fits, release build\n"
+    );
+    println!("| record | wall s | CPU s | iterations | plant RHS evals | worst parameter error |");
+    println!("|---|---:|---:|---:|---:|---:|");
+    for (label, lugre, mass, known, errors) in cases {
+        let synth = RecordSynth {
+            errors,
+            ..RecordSynth::new(lugre, mass)
+        };
+        let (record, _) = synth.generate()?;
+        let options = RecordOptions {
+            mass: if known {
+                MassChoice::Known(mass)
+            } else {
+                MassChoice::Fit
+            },
+            ..RecordOptions::default()
+        };
+        let (mut walls, mut cpus) = (Vec::new(), Vec::new());
+        let mut last = None;
+        for _ in 0..repeat {
+            let (wall, cpu) = (Instant::now(), crate::bench::thread_cpu_time());
+            let fit = fit_record(&record, &options, &mut |_| true)?;
+            walls.push(wall.elapsed().as_secs_f64());
+            cpus.push(crate::bench::thread_cpu_time() - cpu);
+            last = Some(fit);
+        }
+        let fit = last.ok_or_else(|| anyhow::anyhow!("no fit"))?;
+        let truth = Theta::new(&lugre, mass);
+        let (worst, name) = RecordParam::ALL
+            .iter()
+            .map(|p| ((fit.theta.get(*p) / truth.get(*p) - 1.0).abs(), p.name()))
+            .fold((0.0, ""), |a, b| if b.0 > a.0 { b } else { a });
+        walls.sort_by(f64::total_cmp);
+        cpus.sort_by(f64::total_cmp);
+        println!(
+            "| {label} | {:.2} | {:.2} | {} | {} | {worst:.1e} ({name}) |",
+            walls[walls.len() / 2],
+            cpus[cpus.len() / 2],
+            fit.iterations,
+            fit.rhs_evaluations
+        );
+    }
+    Ok(())
+}
