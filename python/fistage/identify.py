@@ -9,7 +9,7 @@ import numpy
 
 from . import _fistage
 
-__all__ = ["Fit", "stribeck", "frf"]
+__all__ = ["Fit", "stribeck", "frf", "record", "read_record", "simulate_record"]
 
 
 class Fit:
@@ -82,3 +82,43 @@ def frf(freq, response=None, magnitude=None, phase=None, mass=None, sigma2=None)
     else:
         raise _fistage.Error("give response (complex) or magnitude (with phase, or alone)")
     return Fit(json.loads(text))
+
+
+def record(t, force, position, mass=None, loss="l2", horizon=0.01, progress=None):
+    """Fits all six LuGre parameters (and the mass unless given, kg) to a
+    recorded run by output error on the position (paper Eq. 31): t in s,
+    force in N held over each sample interval (force[k] acts on
+    [t[k], t[k+1])), position in m sampled at t[k] before force[k] acts; the
+    stage starts at rest with relaxed bristles. No start is asked: the first
+    estimates come from the record. loss "l2" or "huber"; horizon (s) is how
+    often the simulated position is re-anchored to the encoder (None: pure
+    output error). progress(iteration, rms) is called after every
+    iteration; Ctrl-C stops the fit. The result also holds the simulated
+    position as ``fit.simulated``."""
+    text, simulated = _fistage._record(
+        _floats("t", t), _floats("force", force), _floats("position", position),
+        mass=mass, loss=loss, horizon=horizon, progress=progress)
+    fit = Fit(json.loads(text))
+    fit.simulated = numpy.asarray(simulated, dtype=numpy.float64)
+    return fit
+
+
+def read_record(path):
+    """Reads a record file (CSV, or a MAT-file as MATLAB's save writes it):
+    columns or variables by unit suffix (t_s, f_servo_N, x_nm, ...).
+    Returns (t, force, position) as numpy arrays in s, N and m."""
+    t, force, position = _fistage._read_record(str(path))
+    return tuple(numpy.asarray(a, dtype=numpy.float64) for a in (t, force, position))
+
+
+def simulate_record(stage, seed=1, quantum=1e-9, noise=0.0, disturbance=0.0, rate=10000.0):
+    """A lab-style record of the open-loop stage of a robot (.urdf) or
+    scenario (.toml) file, as ``fistage identify simulate-record`` makes it:
+    small and large chirps, breakaway ramps, holds, steps and rests, 7 s;
+    encoder step quantum (m), white position noise (m), an unmeasured force
+    disturbance (RMS, N). Returns (t, force, position, truth), truth the
+    stage's parameters by name."""
+    t, force, position, truth = _fistage._simulate_record(
+        str(stage), seed=seed, quantum=quantum, noise=noise, disturbance=disturbance, rate=rate)
+    arrays = tuple(numpy.asarray(a, dtype=numpy.float64) for a in (t, force, position))
+    return arrays + (json.loads(truth),)

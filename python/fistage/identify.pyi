@@ -1,10 +1,12 @@
 """Type stubs of fistage.identify."""
 
-from typing import Any, Dict, List, Optional
+from typing import Any, Callable, Dict, List, Optional, Tuple
 
 import numpy.typing
 
 class Fit:
+    simulated: numpy.typing.NDArray[numpy.float64]
+    """The simulated position of a record fit, m."""
     report: Dict[str, Any]
     """The whole report, as fit.json holds it."""
     parameters: List[str]
@@ -21,3 +23,16 @@ def frf(freq: numpy.typing.ArrayLike, response: Optional[numpy.typing.ArrayLike]
         magnitude: Optional[numpy.typing.ArrayLike] = None, phase: Optional[numpy.typing.ArrayLike] = None,
         mass: Optional[float] = None, sigma2: Optional[float] = None) -> Fit:
     """Fits sigma0, sigma1 + sigma2 (and the mass) to the pre-motion FRF: Hz, m/N, rad."""
+
+def record(t: numpy.typing.ArrayLike, force: numpy.typing.ArrayLike, position: numpy.typing.ArrayLike,
+           mass: Optional[float] = None, loss: str = "l2", horizon: Optional[float] = 0.01,
+           progress: Optional[Callable[[int, float], None]] = None) -> Fit:
+    """Fits the six LuGre parameters (and the mass) to a record: s, N (held over each interval), m."""
+
+def read_record(path: str) -> Tuple[numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64],
+                                    numpy.typing.NDArray[numpy.float64]]:
+    """(t, force, position) of a CSV or MAT-file record, in s, N and m."""
+
+def simulate_record(stage: str, seed: int = 1, quantum: float = 1e-9, noise: float = 0.0,
+                    disturbance: float = 0.0, rate: float = 10000.0) -> Tuple[Any, Any, Any, Dict[str, float]]:
+    """A lab-style record of the open-loop stage: (t, force, position, truth)."""

@@ -3,9 +3,15 @@
 //! `ci95`, `std_error`, `unit`; residuals; what the data cannot determine),
 //! which the Python side wraps for indexing by parameter name.
 
+use fistage_analysis::lab::LabStage;
+use fistage_analysis::record_lab::RecordLab;
+use fistage_ident::record::{
+    FitProgress, LabErrors, MassChoice, Record, RecordOptions, RecordReport, fit_record,
+    read_record,
+};
 use fistage_ident::{
     Complex, FrfData, FrfOptions, FrfReport, Loss, MassOption, Sigma2Input, StribeckData,
-    StribeckOptions, StribeckReport, fit_frf, fit_stribeck, fit_stribeck_asymmetric,
+    StribeckOptions, StribeckReport, UnitOverrides, fit_frf, fit_stribeck, fit_stribeck_asymmetric,
 };
 use pyo3::prelude::*;
 
@@ -121,4 +127,131 @@ pub fn _frf(
         .detach(|| fit_frf(&data, &options).map(|fit| FrfReport::new("arrays", &fit)))
         .map_err(ident_error)?;
     json(&report)
+}
+
+/// The record fit (output error on the position): time (s), force (N) held
+/// over each interval, position (m); the report as JSON text and the
+/// simulated position. `progress(iteration, rms)` is called after every
+/// iteration (the interpreter held only then); Ctrl-C, or an exception in
+/// the callback, stops the fit.
+#[pyfunction]
+#[pyo3(signature = (time, force, position, mass = None, loss = "l2", horizon = Some(0.01), progress = None))]
+#[allow(clippy::too_many_arguments)]
+pub fn _record(
+    py: Python<'_>,
+    time: Vec<f64>,
+    force: Vec<f64>,
+    position: Vec<f64>,
+    mass: Option<f64>,
+    loss: &str,
+    horizon: Option<f64>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<(String, Vec<f64>)> {
+    let loss = match loss {
+        "l2" => Loss::L2,
+        "huber" => Loss::Huber,
+        other => {
+            return Err(Error::new_err(format!(
+                "loss must be \"l2\" or \"huber\", got \"{other}\""
+            )));
+        }
+    };
+    let record = Record::from_arrays("arrays", time, force, position).map_err(ident_error)?;
+    let options = RecordOptions {
+        mass: mass.map_or(MassChoice::Fit, MassChoice::Known),
+        loss,
+        horizon,
+        ..RecordOptions::default()
+    };
+    let mut raised: Option<PyErr> = None;
+    let fit = py.detach(|| {
+        fit_record(&record, &options, &mut |p: &FitProgress| {
+            Python::attach(|py| {
+                if let Err(e) = py.check_signals() {
+                    raised = Some(e);
+                    return false;
+                }
+                if let (Some(callback), true) = (&progress, p.iteration > 0)
+                    && let Err(e) = callback.call1(py, (p.iteration, p.rms))
+                {
+                    raised = Some(e);
+                    return false;
+                }
+                true
+            })
+        })
+    });
+    let fit = match (fit, raised) {
+        (_, Some(e)) => return Err(e),
+        (result, None) => result.map_err(ident_error)?,
+    };
+    let report = RecordReport::new(&record, &fit);
+    Ok((json(&report)?, fit.simulated))
+}
+
+/// Reads a record file (CSV or MAT-file, columns by unit suffix): time (s),
+/// force (N) and position (m).
+#[pyfunction]
+pub fn _read_record(path: std::path::PathBuf) -> PyResult<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+    let record = read_record(&path, &UnitOverrides::default())
+        .map_err(|e| crate::LoadError_::new_err(e.to_string()))?;
+    Ok((record.time, record.force, record.position))
+}
+
+/// Time, force, position and the true parameters (JSON) of a simulated record.
+type SimulatedRecord = (Vec<f64>, Vec<f64>, Vec<f64>, String);
+
+/// A lab-style record (chirps, breakaway ramps, holds, steps, rests) of the
+/// open-loop stage of a robot or scenario file: time (s), force (N),
+/// position (m), and the stage's true parameters as JSON.
+#[pyfunction]
+#[pyo3(signature = (stage, seed = 1, quantum = 1e-9, noise = 0.0, disturbance = 0.0, rate = 10_000.0))]
+pub fn _simulate_record(
+    py: Python<'_>,
+    stage: std::path::PathBuf,
+    seed: u64,
+    quantum: f64,
+    noise: f64,
+    disturbance: f64,
+    rate: f64,
+) -> PyResult<SimulatedRecord> {
+    for (name, value) in [
+        ("quantum", quantum),
+        ("noise", noise),
+        ("disturbance", disturbance),
+    ] {
+        if !(value.is_finite() && value >= 0.0) {
+            return Err(Error::new_err(format!("{name} must be >= 0, got {value}")));
+        }
+    }
+    if !(rate.is_finite() && rate > 0.0 && rate <= 1e7) {
+        return Err(Error::new_err(format!(
+            "rate must be in (0, 1e7] Hz, got {rate}"
+        )));
+    }
+    let lab_stage =
+        LabStage::load(&stage).map_err(|e| crate::LoadError_::new_err(e.to_string()))?;
+    let mut lab = RecordLab::new(seed);
+    lab.dt = 1.0 / rate;
+    lab.errors = LabErrors {
+        quantum,
+        position_noise: noise,
+        disturbance_rms: disturbance,
+        seed,
+        ..LabErrors::exact()
+    };
+    let (record, _) = py
+        .detach(|| lab.measure(&lab_stage))
+        .map_err(|e| crate::SimulationError::new_err(e.to_string()))?;
+    let p = lab_stage.friction();
+    let truth = serde_json::json!({
+        "f_c": p.f_c, "f_s": p.f_s, "v_s": p.v_s, "sigma0": p.sigma0,
+        "sigma1": p.sigma1, "sigma2": p.sigma2, "mass": lab_stage.moving_mass(),
+    });
+    Ok((
+        record.time,
+        record.force,
+        record.position,
+        truth.to_string(),
+    ))
 }

@@ -331,6 +331,9 @@ fn _fistage(m: &Bound<'_, PyModule>) -> PyResult<()> {
         m.py().get_type::<IdentificationError>(),
     )?;
     m.add_function(wrap_pyfunction!(identify::_stribeck, m)?)?;
+    m.add_function(wrap_pyfunction!(identify::_record, m)?)?;
+    m.add_function(wrap_pyfunction!(identify::_read_record, m)?)?;
+    m.add_function(wrap_pyfunction!(identify::_simulate_record, m)?)?;
     m.add_function(wrap_pyfunction!(identify::_frf, m)?)?;
     Ok(())
 }

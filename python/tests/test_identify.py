@@ -58,3 +58,44 @@ def test_bad_input_raises_fistage_errors():
     with pytest.raises(KeyError, match="sigma0"):
         fistage.identify.frf(numpy.geomspace(10, 1000, 20),
                              response=1 / (1.5 * (2j * numpy.pi * numpy.geomspace(10, 1000, 20)) ** 2 + 2.2e6))["mu"]
+
+
+def test_record_fit_recovers_the_rigid_stage_from_arrays_and_files(root, tmp_path):
+    """A lab-style record of the rigid one-bearing stage (the full assembled
+    model) gives its six LuGre parameters and its mass back through the
+    one-mass output-error fit, from arrays and from a CSV file; the progress
+    callback sees every iteration."""
+    t, force, position, truth = fistage.identify.simulate_record(root / "robots/stage_1dof_rigid.urdf")
+    assert t.size == 70000 and numpy.all(numpy.diff(t) > 0)
+    seen = []
+    fit = fistage.identify.record(t, force, position, progress=lambda i, rms: seen.append((i, rms)))
+    for name in ("f_c", "f_s", "v_s", "sigma0", "sigma1", "sigma2", "mass"):
+        assert fit[name]["value"] == pytest.approx(truth[name], rel=1e-3), name
+        low, high = fit[name]["ci95"]
+        assert low < high
+    assert fit.simulated.shape == t.shape
+    assert len(seen) >= 2 and seen[-1][1] < 1e-9
+    csv = tmp_path / "run.csv"
+    numpy.savetxt(csv, numpy.column_stack([t, force, position * 1e9]), delimiter=",",
+                  header="t_s,f_servo_N,x_nm", comments="", fmt="%.17g")
+    t2, force2, position2 = fistage.identify.read_record(csv)
+    assert numpy.allclose(position2, position, rtol=0, atol=1e-15)
+    known = fistage.identify.record(t2, force2, position2, mass=truth["mass"])
+    assert known["mass"]["std_error"] == 0.0
+    assert known["f_c"]["value"] == pytest.approx(truth["f_c"], rel=1e-3)
+
+
+def test_record_fit_stops_when_the_callback_raises(root, tmp_path):
+    t, force, position, _ = fistage.identify.simulate_record(root / "robots/stage_1dof_rigid.urdf")
+
+    def stop(iteration, rms):
+        raise RuntimeError("stop here")
+
+    with pytest.raises(RuntimeError, match="stop here"):
+        fistage.identify.record(t, force, position, progress=stop)
+    with pytest.raises(fistage.Error, match="does not increase"):
+        fistage.identify.record(t[::-1], force, position)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t_s,force_N,y_nm\n0,0,0\n")
+    with pytest.raises(fistage.Error, match="bad.csv.*no position column"):
+        fistage.identify.read_record(bad)
