@@ -197,7 +197,7 @@ fn unknown_output_signal_is_named_before_the_run() {
     let mut loaded = fistage_tests::load("scenarios/paper/fig05b_fi.toml");
     loaded.scenario.signals = Some(vec!["encoder.position".into(), "encoder.jerk".into()]);
     loaded.scenario.duration = 1e6; // would take hours if it ran first
-    let error = fistage_sim::run_scenario(&loaded, &mut |_| {})
+    let error = fistage_sim::run_scenario(&loaded, &mut fistage_sim::no_progress)
         .expect_err("must fail")
         .to_string();
     assert_mentions(

@@ -29,7 +29,7 @@ fn energy_never_increases_without_servo() {
                 &x0,
                 &still(),
                 &settings(0.5, 1e-4, 1e-10),
-                &mut |_| {},
+                &mut fistage_sim::no_progress,
             )
             .unwrap();
         let mut ws = model.workspace();
@@ -71,7 +71,7 @@ fn sliding_contact_reaches_eq30() {
                 &model.zero_state(),
                 &excitation,
                 &settings(1.0, 1e-3, 1e-9),
-                &mut |_| {},
+                &mut fistage_sim::no_progress,
             )
             .unwrap();
         let mut ws = model.workspace();
@@ -139,7 +139,7 @@ fn two_level_prismatic_tree_matches_modal_solution() {
             &x0,
             &still(),
             &settings(1.0, 1e-3, 1e-11),
-            &mut |_| {},
+            &mut fistage_sim::no_progress,
         )
         .unwrap();
     let mut worst = 0.0_f64;
@@ -175,7 +175,7 @@ fn pendulum_on_free_cart_matches_closed_form() {
             &x0,
             &still(),
             &settings(t_end, 1e-3, 1e-11),
-            &mut |_| {},
+            &mut fistage_sim::no_progress,
         )
         .unwrap();
     let mut worst_angle = 0.0_f64;
@@ -275,7 +275,8 @@ fn integral_action_lets_staircase_steps_settle() {
                 .to_string()
         );
         let loaded = fistage_tests::load_text(&text);
-        let output = fistage_sim::run_scenario(&loaded, &mut |_| {}).expect("run");
+        let output =
+            fistage_sim::run_scenario(&loaded, &mut fistage_sim::no_progress).expect("run");
         output
             .tracking
             .expect("a servo")

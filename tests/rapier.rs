@@ -15,7 +15,7 @@ fn with_engine(loaded: &Loaded, engine: &str, dt: Option<f64>) -> RunOutput {
     let mut loaded = loaded.clone();
     loaded.scenario.solver.engine = engine.parse().expect("engine name");
     loaded.scenario.rapier.dt = dt;
-    run_scenario(&loaded, &mut |_| {}).expect("run")
+    run_scenario(&loaded, &mut fistage_sim::no_progress).expect("run")
 }
 
 /// Relative differences (peak-to-peak, mean) of a signal between two runs.
@@ -109,12 +109,24 @@ fn tumbling_body_conserves_momentum_and_agrees_with_native() {
         ..settings(1.0, 1e-2, 1e-11)
     };
     let native = NativeEngine
-        .simulate(&model, &x0, &still, &settings, &mut |_| {})
+        .simulate(
+            &model,
+            &x0,
+            &still,
+            &settings,
+            &mut fistage_sim::no_progress,
+        )
         .expect("native");
     let mut rapier_engine = RapierEngine::default();
     rapier_engine.settings.dt = Some(1e-5);
     let rapier = rapier_engine
-        .simulate(&model, &x0, &still, &settings, &mut |_| {})
+        .simulate(
+            &model,
+            &x0,
+            &still,
+            &settings,
+            &mut fistage_sim::no_progress,
+        )
         .expect("rapier");
     let l0 = momentum(&model, &x0);
     let mut drift: f64 = 0.0;
@@ -168,7 +180,8 @@ fn hard_stop_holds_the_table_where_native_runs_past() {
     // The native engine refuses a scenario with colliders instead of ignoring them.
     let mut native = loaded.clone();
     native.scenario.solver.engine = fistage_model::EngineKind::Native;
-    let error = run_scenario(&native, &mut |_| {}).expect_err("native refuses colliders");
+    let error =
+        run_scenario(&native, &mut fistage_sim::no_progress).expect_err("native refuses colliders");
     assert!(error.to_string().contains("rapier.stop"), "{error}");
 }
 
@@ -241,7 +254,13 @@ fn pendulum_on_a_cart_swings_at_the_closed_form_frequency() {
     let mut engine = RapierEngine::default();
     engine.settings.dt = Some(1e-5);
     let trajectory = engine
-        .simulate(&model, &x0, &still, &settings, &mut |_| {})
+        .simulate(
+            &model,
+            &x0,
+            &still,
+            &settings,
+            &mut fistage_sim::no_progress,
+        )
         .expect("rapier");
     let (mut worst_angle, mut worst_momentum) = (0.0_f64, 0.0_f64);
     for (k, &t) in trajectory.times.iter().enumerate() {
@@ -292,12 +311,24 @@ fn moving_free_root_with_a_jointed_child_follows_native() {
         ..settings(0.5, 1e-2, 1e-11)
     };
     let native = NativeEngine
-        .simulate(&model, &x0, &still, &settings, &mut |_| {})
+        .simulate(
+            &model,
+            &x0,
+            &still,
+            &settings,
+            &mut fistage_sim::no_progress,
+        )
         .expect("native");
     let mut engine = RapierEngine::default();
     engine.settings.dt = Some(1e-5);
     let rapier = engine
-        .simulate(&model, &x0, &still, &settings, &mut |_| {})
+        .simulate(
+            &model,
+            &x0,
+            &still,
+            &settings,
+            &mut fistage_sim::no_progress,
+        )
         .expect("rapier");
     let (a, b) = (rapier.last_state(), native.last_state());
     let position = (Vector3::new(a[0], a[1], a[2]) - Vector3::new(b[0], b[1], b[2])).norm();
@@ -329,10 +360,22 @@ fn off_grid_end_time_gets_its_own_sample() {
     let mut engine = RapierEngine::default();
     engine.settings.dt = Some(2e-4);
     let rapier = engine
-        .simulate(model, &x0, &excitation, &settings, &mut |_| {})
+        .simulate(
+            model,
+            &x0,
+            &excitation,
+            &settings,
+            &mut fistage_sim::no_progress,
+        )
         .expect("rapier");
     let native = NativeEngine
-        .simulate(model, &x0, &excitation, &settings, &mut |_| {})
+        .simulate(
+            model,
+            &x0,
+            &excitation,
+            &settings,
+            &mut fistage_sim::no_progress,
+        )
         .expect("native");
     assert_eq!(rapier.times, native.times);
     assert_eq!(rapier.times.last().copied(), Some(0.01005));

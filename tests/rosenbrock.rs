@@ -11,7 +11,7 @@ fn with(loaded: &Loaded, engine: &str, rtol: f64) -> RunOutput {
     let mut loaded = loaded.clone();
     loaded.scenario.solver.engine = engine.parse().expect("engine name");
     loaded.scenario.solver.rtol = rtol;
-    run_scenario(&loaded, &mut |_| {}).expect("run")
+    run_scenario(&loaded, &mut fistage_sim::no_progress).expect("run")
 }
 
 fn relative(a: f64, b: f64) -> f64 {

@@ -173,7 +173,13 @@ fn torque_free_tumbling_conserves_momentum_and_energy() {
         max_steps: 10_000_000,
     };
     let trajectory = NativeEngine
-        .simulate(&model, &x0, &still(), &settings, &mut |_| {})
+        .simulate(
+            &model,
+            &x0,
+            &still(),
+            &settings,
+            &mut fistage_sim::no_progress,
+        )
         .expect("runs");
     let (l0, e0) = momentum_and_energy(&model, &x0);
     let mut omega_change = 0.0_f64;

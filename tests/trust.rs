@@ -99,7 +99,8 @@ fn a_collapsing_step_size_fails_fast() {
         robot,
         model,
     };
-    let error = fistage_sim::run_scenario(&loaded, &mut |_| {}).expect_err("cannot succeed");
+    let error = fistage_sim::run_scenario(&loaded, &mut fistage_sim::no_progress)
+        .expect_err("cannot succeed");
     let message = error.to_string();
     assert!(message.contains("step size collapsed"), "{message}");
 }

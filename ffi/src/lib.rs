@@ -49,7 +49,7 @@ pub mod variables;
 pub use instance::{CAPABILITIES, CallError, Instance};
 pub use logger::LOG_CATEGORIES;
 pub use model_description::{Capabilities, MODEL_IDENTIFIER, model_description};
-pub use package::{PackageError, build_fmu};
+pub use package::{PackageError, build_fmu, build_fmu_from_text};
 pub use phase::Phase;
 pub use state::Snapshot;
 pub use variables::{Binding, Causality, Variable, variables};

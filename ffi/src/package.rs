@@ -76,9 +76,11 @@ fn write(file: &Path, bytes: &[u8]) -> Result<(), PackageError> {
 }
 
 /// The files of `resources/`: the rewritten scenario, the robot and any reference CSV.
-fn resource_files(scenario_path: &Path) -> Result<Vec<(&'static str, Vec<u8>)>, PackageError> {
-    let scenario = fistage_model::Scenario::from_file(scenario_path)?;
-    let text = String::from_utf8_lossy(&read(scenario_path)?).into_owned();
+fn resource_files(
+    scenario_path: &Path,
+    text: &str,
+) -> Result<Vec<(&'static str, Vec<u8>)>, PackageError> {
+    let scenario = fistage_model::Scenario::from_str(text, scenario_path)?;
     let bad = |reason: String| PackageError::Scenario {
         file: scenario_path.to_path_buf(),
         reason,
@@ -136,7 +138,8 @@ impl Drop for Scratch {
 /// Writes the FMU's `resources/` files for a scenario into `folder` (which
 /// must exist): what an instance loads at fmi2Instantiate.
 pub fn write_resources(scenario_path: &Path, folder: &Path) -> Result<(), PackageError> {
-    for (name, bytes) in resource_files(scenario_path)? {
+    let text = String::from_utf8_lossy(&read(scenario_path)?).into_owned();
+    for (name, bytes) in resource_files(scenario_path, &text)? {
         write(&folder.join(name), &bytes)?;
     }
     Ok(())
@@ -144,7 +147,18 @@ pub fn write_resources(scenario_path: &Path, folder: &Path) -> Result<(), Packag
 
 /// The bytes of an `.fmu` for the scenario, with `library` as its binary.
 pub fn build_fmu(scenario_path: &Path, library: &Path) -> Result<Vec<u8>, PackageError> {
-    let resources = resource_files(scenario_path)?;
+    let text = String::from_utf8_lossy(&read(scenario_path)?).into_owned();
+    build_fmu_from_text(&text, scenario_path, library)
+}
+
+/// [`build_fmu`] for a scenario given as text, its relative paths resolved
+/// against `scenario_path` (which need not exist).
+pub fn build_fmu_from_text(
+    text: &str,
+    scenario_path: &Path,
+    library: &Path,
+) -> Result<Vec<u8>, PackageError> {
+    let resources = resource_files(scenario_path, text)?;
     let scratch = Scratch::new()?;
     for (name, bytes) in &resources {
         write(&scratch.0.join(name), bytes)?;

@@ -17,7 +17,7 @@ fn native_run(scenario: &str, duration: f64) -> HashMap<String, Vec<f64>> {
     let mut loaded = fistage_model::load(&support::root().join(scenario)).expect("scenario loads");
     loaded.scenario.duration = duration;
     loaded.scenario.signals = None;
-    let output = run_scenario(&loaded, &mut |_| {}).expect("native run");
+    let output = run_scenario(&loaded, &mut fistage_sim::no_progress).expect("native run");
     let table = output.signals;
     table.names.into_iter().zip(table.columns).collect()
 }

@@ -10,7 +10,10 @@ The same library as the ``fistage`` program, with numpy arrays::
     print(result.summary["signals"]["encoder.position"]["peak_to_peak"])
 
 Scenarios pickle, so ``multiprocessing`` or ``concurrent.futures`` can map
-runs over parameters. Errors are subclasses of :class:`fistage.Error` with
+runs over parameters. ``scenario.sweep()`` and ``scenario.robust()`` run
+the scenario's ``[sweep]`` and ``[robust]`` studies as the program does and
+give :class:`Study` results (numpy columns of points.csv / samples.csv, and
+summary.json); ``scenario.export_fmu(path)`` packages it as an FMU. Errors are subclasses of :class:`fistage.Error` with
 the program's messages.
 """
 
@@ -27,6 +30,7 @@ from . import identify
 
 __all__ = [
     "Error",
+    "Study",
     "IdentificationError",
     "LoadError",
     "Result",
@@ -49,3 +53,84 @@ def to_pandas(result):
 
 
 Result.to_pandas = to_pandas
+
+
+class Study:
+    """The result of a sweep or a tolerance analysis: ``columns`` (name to
+    numpy array: numbers as float64 with NaN where the program wrote
+    nothing, verdicts as bool, or object arrays with None where a verdict is
+    undetermined), ``points`` (one dict per row, as points.json holds
+    them), ``summary`` (summary.json of a tolerance analysis, else None).
+    ``study["stable_linear"]`` is a column; ``to_pandas()`` a DataFrame."""
+
+    def __init__(self, table, summary=None):
+        import numpy
+
+        lines = [line for line in table.splitlines() if line]
+        names = lines[0].split(",")
+        rows = [line.split(",") for line in lines[1:]]
+        self.columns = {}
+        self.points = [dict() for _ in rows]
+        for j, name in enumerate(names):
+            cells = [row[j] if j < len(row) else "" for row in rows]
+            values = [_cell(c) for c in cells]
+            for point, value in zip(self.points, values):
+                point[name] = value
+            if any(isinstance(v, bool) for v in values):
+                dtype = bool if all(isinstance(v, bool) for v in values) else object
+                self.columns[name] = numpy.array(values, dtype=dtype)
+            else:
+                self.columns[name] = numpy.array(
+                    [numpy.nan if v is None else v for v in values], dtype=numpy.float64)
+        self.summary = summary
+
+    def __getitem__(self, name):
+        try:
+            return self.columns[name]
+        except KeyError:
+            raise KeyError("no column %r (columns: %s)" % (name, ", ".join(self.columns))) from None
+
+    def __len__(self):
+        return len(self.points)
+
+    def __repr__(self):
+        return "Study(%d rows, columns %s)" % (len(self.points), ", ".join(self.columns))
+
+    def to_pandas(self):
+        """The columns as a pandas DataFrame (needs pandas)."""
+        import pandas
+
+        return pandas.DataFrame(self.columns)
+
+
+def _cell(text):
+    if text == "":
+        return None
+    if text in ("true", "false"):
+        return text == "true"
+    return float(text)
+
+
+def _sweep(self, threads=None, progress=None):
+    """Runs the scenario's ``[sweep]`` grid as ``fistage sweep`` does (the
+    interpreter released, ``threads`` threads, default all);
+    ``progress(done, total)`` after each point. Returns a :class:`Study`
+    with the columns of points.csv (each axis, then stable_linear,
+    stable_sim, amplitude, max_real_eig, bistable)."""
+    return Study(self._sweep(threads=threads, progress=progress))
+
+
+def _robust(self, samples=None, seed=None, threads=None, progress=None):
+    """Runs the scenario's ``[robust]`` tolerance analysis as ``fistage
+    robust`` does: ``samples`` and ``seed`` replace the table's when given.
+    Returns a :class:`Study` with the columns of samples.csv and
+    ``summary`` as summary.json (probabilities with their intervals,
+    quantiles, sensitivities)."""
+    import json
+
+    table, summary = self._robust(samples=samples, seed=seed, threads=threads, progress=progress)
+    return Study(table, json.loads(summary))
+
+
+Scenario.sweep = _sweep
+Scenario.robust = _robust

@@ -1,7 +1,7 @@
 """Type stubs of the fistage package."""
 
 from os import PathLike
-from typing import Any, Dict, List, Optional, Union
+from typing import Callable, Any, Dict, List, Optional, Union
 
 import numpy
 import numpy.typing
@@ -51,6 +51,24 @@ class Scenario:
         """Simulates the scenario (interpreter released) and returns its signals."""
     def modes(self, equilibrium: str = "slipping") -> Dict[str, Any]:
         """The linearisation at an equilibrium, as modes.json, with numpy eigenvalues."""
+    def sweep(self, threads: Optional[int] = None,
+              progress: Optional[Callable[[int, int], None]] = None) -> "Study":
+        """The scenario's [sweep] grid as `fistage sweep` computes it."""
+    def robust(self, samples: Optional[int] = None, seed: Optional[int] = None, threads: Optional[int] = None,
+               progress: Optional[Callable[[int, int], None]] = None) -> "Study":
+        """The scenario's [robust] tolerance analysis as `fistage robust` computes it."""
+    def export_fmu(self, path: Union[str, PathLike], library: Union[str, PathLike, None] = None) -> PathLike:
+        """The scenario as an FMI 2.0 Co-Simulation FMU, as `fistage fmu` packages it."""
+
+class Study:
+    """Columns of points.csv / samples.csv as numpy arrays, rows as dicts, summary.json."""
+
+    columns: Dict[str, Any]
+    points: List[Dict[str, Any]]
+    summary: Optional[Dict[str, Any]]
+    def __getitem__(self, name: str) -> Any: ...
+    def __len__(self) -> int: ...
+    def to_pandas(self) -> Any: ...
 
 def load(path: Union[str, PathLike]) -> Scenario:
     """Reads and checks a scenario file and its robot."""

@@ -5,6 +5,7 @@
 //! `fistage run` does, so errors carry the program's messages. Long work
 //! runs with the interpreter released.
 
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 
 use fistage_analysis::assess::apply_parameter;
@@ -38,6 +39,7 @@ create_exception!(
 );
 
 mod identify;
+mod studies;
 
 fn load_error(e: LoadError) -> PyErr {
     LoadError_::new_err(e.to_string())
@@ -129,11 +131,19 @@ impl Scenario {
             .collect()
     }
 
-    /// run(rtol=None, engine=None) -> Result: simulates the scenario (with
-    /// the interpreter released) and gives its signals as numpy arrays.
-    /// `engine` is "native", "rosenbrock" or "rapier".
-    #[pyo3(signature = (rtol=None, engine=None))]
-    fn run(&self, py: Python<'_>, rtol: Option<f64>, engine: Option<&str>) -> PyResult<RunResult> {
+    /// run(rtol=None, engine=None, progress=None) -> Result: simulates the
+    /// scenario (with the interpreter released) and gives its signals as
+    /// numpy arrays. `engine` is "native", "rosenbrock" or "rapier".
+    /// `progress(fraction)` is called now and then (every 2048 steps);
+    /// Ctrl-C, or an exception in the callback, stops the run.
+    #[pyo3(signature = (rtol=None, engine=None, progress=None))]
+    fn run(
+        &self,
+        py: Python<'_>,
+        rtol: Option<f64>,
+        engine: Option<&str>,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<RunResult> {
         let mut loaded = self.loaded().map_err(load_error)?;
         if let Some(rtol) = rtol {
             SolverSettings::check_rtol(rtol)
@@ -144,9 +154,29 @@ impl Scenario {
             let kind: EngineKind = engine.parse().map_err(Error::new_err)?;
             loaded.scenario.solver.engine = kind;
         }
-        let output = py
-            .detach(|| fistage_sim::run_scenario(&loaded, &mut |_| {}))
-            .map_err(|e| SimulationError::new_err(e.to_string()))?;
+        let mut raised: Option<PyErr> = None;
+        let output = py.detach(|| {
+            fistage_sim::run_scenario(&loaded, &mut |fraction| {
+                Python::attach(|py| {
+                    let stop = py.check_signals().err().or_else(|| {
+                        progress
+                            .as_ref()
+                            .and_then(|callback| callback.call1(py, (fraction,)).err())
+                    });
+                    match stop {
+                        Some(e) => {
+                            raised = Some(e);
+                            ControlFlow::Break(())
+                        }
+                        None => ControlFlow::Continue(()),
+                    }
+                })
+            })
+        });
+        if let Some(e) = raised {
+            return Err(e);
+        }
+        let output = output.map_err(|e| SimulationError::new_err(e.to_string()))?;
         let summary = serde_json::to_string(&fistage_sim::summary::document(&loaded, &output))
             .map_err(|e| Error::new_err(e.to_string()))?;
         let json = py.import("json")?;
@@ -207,6 +237,59 @@ impl Scenario {
             column(analysis.modes.iter().map(|m| m.damping_ratio).collect())?,
         )?;
         Ok(result)
+    }
+
+    /// sweep(threads=None, progress=None) -> (points.csv text): the
+    /// scenario's `[sweep]` grid as `fistage sweep` computes it, on `threads`
+    /// threads (default: all); `progress(done, total)` after each point.
+    /// The Python side turns it into numpy columns.
+    #[pyo3(signature = (threads=None, progress=None))]
+    fn _sweep(
+        &self,
+        py: Python<'_>,
+        threads: Option<usize>,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<String> {
+        let loaded = self.loaded().map_err(load_error)?;
+        let (_, robot) = self.study().map_err(load_error)?;
+        studies::sweep(py, &loaded, &robot, threads, progress)
+    }
+
+    /// robust(samples=None, seed=None, threads=None, progress=None) ->
+    /// (samples.csv text, summary.json text): the scenario's `[robust]`
+    /// tolerance analysis as `fistage robust` computes it.
+    #[pyo3(signature = (samples=None, seed=None, threads=None, progress=None))]
+    fn _robust(
+        &self,
+        py: Python<'_>,
+        samples: Option<usize>,
+        seed: Option<u64>,
+        threads: Option<usize>,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<(String, String)> {
+        let loaded = self.loaded().map_err(load_error)?;
+        let (_, robot) = self.study().map_err(load_error)?;
+        studies::robust(py, &loaded, &robot, samples, seed, threads, progress)
+    }
+
+    /// export_fmu(path, library=None) -> path: the scenario as an FMI 2.0
+    /// Co-Simulation FMU, as `fistage fmu` packages it. The FMU's shared
+    /// library is `library`, else $FISTAGE_FMI_LIBRARY, else the one built
+    /// in the repository this package came from (`cargo build --release -p
+    /// fistage-fmi`). Overrides set from Python are not in the scenario's
+    /// text, so a scenario with overrides is refused: an importer sets the
+    /// FMU's parameters itself.
+    #[pyo3(signature = (path, library=None))]
+    fn export_fmu(&self, path: PathBuf, library: Option<PathBuf>) -> PyResult<PathBuf> {
+        if !self.overrides.is_empty() {
+            return Err(Error::new_err(format!(
+                "export_fmu packages the scenario's text; its {} Python overrides would be \
+                 lost: write them into the TOML, or set them as the FMU's parameters in the \
+                 importer",
+                self.overrides.len()
+            )));
+        }
+        studies::export_fmu(&self.text, &self.file, &path, library)
     }
 
     /// The scenario's title.

@@ -118,3 +118,34 @@ def test_modes_give_the_program_s_verdict(root):
     assert sticking["equilibrium"] == "sticking"
     with pytest.raises(fistage.Error, match="sticking"):
         fig05b(root).modes("sliding")
+
+
+def test_progress_is_reported_and_a_raising_callback_stops_the_run(root):
+    scenario = fistage.load(root / "scenarios/paper/fig05b_fi.toml")
+    seen = []
+    scenario.run(progress=seen.append)
+    assert seen and seen[-1] == 1.0 and seen == sorted(seen)
+
+    def stop(fraction):
+        raise RuntimeError("enough")
+
+    with pytest.raises(RuntimeError, match="enough"):
+        scenario.run(progress=stop)
+
+
+def test_ctrl_c_stops_a_long_run(root):
+    import os
+    import signal
+    import threading
+    import time
+
+    text = (root / "scenarios/paper/fig05b_fi.toml").read_text()
+    long = fistage.Scenario.from_toml(text.replace("duration = 5.0", "duration = 2000.0"),
+                                      base_dir=root / "scenarios/paper")
+    timer = threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT))
+    start = time.monotonic()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        long.run()
+    timer.join()
+    assert time.monotonic() - start < 2.5

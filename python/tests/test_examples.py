@@ -44,3 +44,14 @@ def test_stability_map_example(tmp_path):
     # Fig. 6b/8: the FI stage is stable only in a pocket of the (k, c) plane.
     assert 0 < stable < 64, text
     assert out.stat().st_size > 5_000
+
+
+def test_tolerance_example(tmp_path):
+    pytest.importorskip("matplotlib")
+    out = tmp_path / "tolerance.png"
+    text = run("tolerance.py", str(out))
+    words = text.split()
+    estimate, low, high = (float(words[i].strip("[],")) for i in (2, 5, 6))
+    assert 0.0 < low <= estimate <= high < 1.0, text
+    assert "most influential" in text
+    assert out.stat().st_size > 5_000

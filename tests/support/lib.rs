@@ -37,7 +37,8 @@ pub fn load_text(text: &str) -> Loaded {
 
 /// Runs a loaded scenario; panics with the engine's message on failure.
 pub fn run(loaded: &Loaded) -> RunOutput {
-    fistage_sim::run_scenario(loaded, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"))
+    fistage_sim::run_scenario(loaded, &mut fistage_sim::no_progress)
+        .unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Steady-state peak-to-peak of a signal in a run.

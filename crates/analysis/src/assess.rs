@@ -243,7 +243,13 @@ fn steady_peak_to_peak(loaded: &Loaded, duration: f64) -> Option<Steady> {
     };
     let x0 = initial_state(model, scenario).ok()?;
     let trajectory = NativeEngine
-        .simulate(model, &x0, &excitation, &settings, &mut |_| {})
+        .simulate(
+            model,
+            &x0,
+            &excitation,
+            &settings,
+            &mut fistage_sim::no_progress,
+        )
         .ok()?;
     let mut ws = model.workspace();
     let mut outputs = vec![0.0; model.signals().len()];

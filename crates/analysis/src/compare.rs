@@ -246,7 +246,8 @@ impl Comparison {
         let outcome = study_with(&case.loaded, &case.robot_file, &assignments)
             .map_err(|e| e.to_string())
             .and_then(|loaded| {
-                fistage_sim::run_scenario(&loaded, &mut |_| {}).map_err(|e| e.to_string())
+                fistage_sim::run_scenario(&loaded, &mut fistage_sim::no_progress)
+                    .map_err(|e| e.to_string())
             });
         match outcome {
             Ok(output) => match output.tracking {

@@ -223,7 +223,13 @@ pub(crate) fn simulate(
         max_step: None,
         max_steps: 200_000_000,
     };
-    NativeEngine.simulate(model, x0, excitation, &settings, &mut |_| {})
+    NativeEngine.simulate(
+        model,
+        x0,
+        excitation,
+        &settings,
+        &mut fistage_sim::no_progress,
+    )
 }
 
 /// One run of a test: `start` drives the model from rest over `settle` (only

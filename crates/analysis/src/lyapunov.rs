@@ -74,8 +74,13 @@ fn advance(loaded: &Loaded, x: &[f64], time: f64) -> Result<Vec<f64>, SimError> 
         sample_interval: time,
         ..SimSettings::from_scenario(&loaded.scenario)
     };
-    let trajectory =
-        NativeEngine.simulate(&loaded.model, x, &excitation, &settings, &mut |_| {})?;
+    let trajectory = NativeEngine.simulate(
+        &loaded.model,
+        x,
+        &excitation,
+        &settings,
+        &mut fistage_sim::no_progress,
+    )?;
     Ok(trajectory.last_state().to_vec())
 }
 

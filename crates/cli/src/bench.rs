@@ -110,8 +110,13 @@ fn time_run(
     let mut last = None;
     for _ in 0..repeat.max(1) {
         let (wall, cpu) = (Instant::now(), thread_cpu_time());
-        let trajectory =
-            engine.simulate(&loaded.model, &x0, &excitation, &settings, &mut |_| {})?;
+        let trajectory = engine.simulate(
+            &loaded.model,
+            &x0,
+            &excitation,
+            &settings,
+            &mut fistage_sim::no_progress,
+        )?;
         cpus.push(thread_cpu_time() - cpu);
         walls.push(wall.elapsed().as_secs_f64());
         last = Some(trajectory);

@@ -79,7 +79,13 @@ fn native_time(scenario: &Path, span: f64) -> anyhow::Result<f64> {
     let settings = SimSettings::from_scenario(&loaded.scenario);
     let excitation = ScenarioExcitation::from_scenario(&loaded.scenario);
     let start = Instant::now();
-    NativeEngine.simulate(&loaded.model, &x0, &excitation, &settings, &mut |_| {})?;
+    NativeEngine.simulate(
+        &loaded.model,
+        &x0,
+        &excitation,
+        &settings,
+        &mut fistage_sim::no_progress,
+    )?;
     Ok(start.elapsed().as_secs_f64())
 }
 

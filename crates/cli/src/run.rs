@@ -68,7 +68,10 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         .unwrap_or_else(|| default_out_dir(&args.scenario));
     let folder = OutputFolder::begin(&out_dir, args.force)?;
     let bar = progress::bar(&format!("run {}", args.scenario.display()));
-    let output = fistage_sim::run_scenario(&loaded, &mut |f| progress::set_fraction(&bar, f))?;
+    let output = fistage_sim::run_scenario(&loaded, &mut |f| {
+        progress::set_fraction(&bar, f);
+        std::ops::ControlFlow::Continue(())
+    })?;
     bar.finish_and_clear();
     let staging = folder.path();
     let format = args.format.unwrap_or(loaded.scenario.output_format);

@@ -127,7 +127,7 @@ impl Stepper {
             &mut system,
             t_end,
             t.max_steps_per_advance,
-            |_| {},
+            |_| std::ops::ControlFlow::Continue(()),
         )?;
         if let Some(i) = integrator.x.iter().position(|v| !v.is_finite()) {
             return Err(SimError::StepSizeUnderflow {
@@ -179,7 +179,7 @@ mod tests {
         settings.rtol = 1e-9;
         let excitation = ScenarioExcitation::from_scenario(scenario);
         let continuous = NativeEngine
-            .simulate(model, &x0, &excitation, &settings, &mut |_| {})
+            .simulate(model, &x0, &excitation, &settings, &mut crate::no_progress)
             .expect("continuous run");
         let held = HeldInputs {
             profile: scenario.reference.clone(),

@@ -6,6 +6,7 @@
 //! budget and the mapping of integrator failures to [`SimError`].
 
 use fistage_model::{InputValues, Model, Workspace};
+use std::ops::ControlFlow;
 
 use crate::dopri::{DormandPrince, OdeSystem, StepCounts, StepFailure, Tolerances};
 use crate::excitation::Excitation;
@@ -162,7 +163,7 @@ pub(crate) fn drive<I: Integrating>(
     system: &mut ModelSystem,
     t_end: f64,
     max_steps: u64,
-    mut after_step: impl FnMut(&I),
+    mut after_step: impl FnMut(&I) -> ControlFlow<()>,
 ) -> Result<(), SimError> {
     let model = system.model;
     let ends = segment_ends(system.excitation.breakpoints(), integrator.time(), t_end);
@@ -188,7 +189,11 @@ pub(crate) fn drive<I: Integrating>(
                 });
             }
             pace.check(integrator.time(), steps, t_end, max_steps)?;
-            after_step(integrator);
+            if after_step(integrator).is_break() {
+                return Err(SimError::Cancelled {
+                    t: integrator.time(),
+                });
+            }
         }
     }
     Ok(())

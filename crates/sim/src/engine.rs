@@ -5,6 +5,7 @@
 //! through the one driver of driver (module `driver`). Which engine runs is an
 //! [`EngineKind`], checked when the scenario is read.
 
+use std::ops::ControlFlow;
 use std::time::Instant;
 
 use fistage_model::{EngineKind, Model};
@@ -16,6 +17,15 @@ use crate::rosenbrock::Rosenbrock;
 use crate::settings::{SimError, SimSettings, check_settings, sample_times};
 use crate::trajectory::{SolverStats, Trajectory};
 
+/// What an engine tells of a run as it goes: the fraction done, now and
+/// then; `ControlFlow::Break` stops the run with [`SimError::Cancelled`].
+pub type Progress<'a> = dyn FnMut(f64) -> ControlFlow<()> + 'a;
+
+/// A [`Progress`] that wants nothing and never stops a run.
+pub fn no_progress(_fraction: f64) -> ControlFlow<()> {
+    ControlFlow::Continue(())
+}
+
 /// An integration engine.
 pub trait Engine {
     /// Which engine this is.
@@ -26,14 +36,15 @@ pub trait Engine {
         self.kind().name()
     }
 
-    /// Integrates from `x0` at t = 0; `progress` receives the fraction done.
+    /// Integrates from `x0` at t = 0; `progress` receives the fraction done
+    /// and may stop the run.
     fn simulate(
         &self,
         model: &Model,
         x0: &[f64],
         excitation: &dyn Excitation,
         settings: &SimSettings,
-        progress: &mut dyn FnMut(f64),
+        progress: &mut Progress<'_>,
     ) -> Result<Trajectory, SimError>;
 }
 
@@ -49,7 +60,7 @@ fn integrate<I: Integrating>(
     x0: &[f64],
     excitation: &dyn Excitation,
     settings: &SimSettings,
-    progress: &mut dyn FnMut(f64),
+    progress: &mut Progress<'_>,
     start: impl FnOnce(&mut ModelSystem) -> I,
 ) -> Result<Trajectory, SimError> {
     check_settings(model, x0, settings)?;
@@ -77,11 +88,13 @@ fn integrate<I: Integrating>(
                 next_sample += 1;
             }
             if integrator.counts().steps.is_multiple_of(2048) {
-                progress(integrator.time() / settings.t_end);
+                progress(integrator.time() / settings.t_end)
+            } else {
+                ControlFlow::Continue(())
             }
         },
     )?;
-    progress(1.0);
+    let _ = progress(1.0);
     trajectory.stats = SolverStats {
         engine: engine.name().to_string(),
         counts: integrator.counts(),
@@ -105,7 +118,7 @@ impl Engine for NativeEngine {
         x0: &[f64],
         excitation: &dyn Excitation,
         settings: &SimSettings,
-        progress: &mut dyn FnMut(f64),
+        progress: &mut Progress<'_>,
     ) -> Result<Trajectory, SimError> {
         let tol = settings_tolerances(model, settings);
         integrate(
@@ -137,7 +150,7 @@ impl Engine for RosenbrockEngine {
         x0: &[f64],
         excitation: &dyn Excitation,
         settings: &SimSettings,
-        progress: &mut dyn FnMut(f64),
+        progress: &mut Progress<'_>,
     ) -> Result<Trajectory, SimError> {
         let tol = settings_tolerances(model, settings);
         let span = settings.sample_interval.min(settings.t_end);

@@ -23,7 +23,7 @@
 //! let mut loaded = fistage_model::load(&root.join("scenarios/paper/fig05b_fi.toml"))?;
 //! loaded.scenario.duration = 0.2;
 //! loaded.scenario.window = [0.1, 0.2];
-//! let output = run_scenario(&loaded, &mut |_fraction| {})?;
+//! let output = run_scenario(&loaded, &mut fistage_sim::no_progress)?;
 //! let table = output
 //!     .summary
 //!     .iter()
@@ -55,7 +55,7 @@ pub mod trajectory;
 
 pub use cosim::{HeldInputs, Stepper, StepperTolerances};
 pub use dopri::{Checkpoint, StepCounts};
-pub use engine::{Engine, NativeEngine, RosenbrockEngine};
+pub use engine::{Engine, NativeEngine, Progress, RosenbrockEngine, no_progress};
 pub use excitation::{Excitation, ScenarioExcitation};
 pub use metrics::{SignalSummary, WindowStats, summarize, window_stats};
 pub use rapier_engine::RapierEngine;

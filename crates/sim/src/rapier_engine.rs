@@ -578,7 +578,7 @@ impl Engine for RapierEngine {
         x0: &[f64],
         excitation: &dyn Excitation,
         settings: &SimSettings,
-        progress: &mut dyn FnMut(f64),
+        progress: &mut crate::engine::Progress<'_>,
     ) -> Result<Trajectory, SimError> {
         crate::settings::check_settings(model, x0, settings)?;
         let started = Instant::now();
@@ -654,8 +654,8 @@ impl Engine for RapierEngine {
                     counts.steps += 1;
                     counts.rhs_evaluations += 1;
                 }
-                if k % 256 == 0 {
-                    progress(t_sample / settings.t_end);
+                if k % 256 == 0 && progress(t_sample / settings.t_end).is_break() {
+                    return Err(SimError::Cancelled { t: t_sample });
                 }
             }
             world.motions(model, &mut motions);
@@ -672,7 +672,7 @@ impl Engine for RapierEngine {
                 record_payload(&world, payload, &motions, signals);
             }
         }
-        progress(1.0);
+        let _ = progress(1.0);
         if let Some(signals) = payload_signals {
             trajectory.extra = signals.into();
         }

@@ -144,7 +144,10 @@ pub fn validate(loaded: &Loaded) -> Result<Vec<f64>, RunError> {
 }
 
 /// Runs a loaded scenario with the engine it names.
-pub fn run_scenario(loaded: &Loaded, progress: &mut dyn FnMut(f64)) -> Result<RunOutput, RunError> {
+pub fn run_scenario(
+    loaded: &Loaded,
+    progress: &mut crate::engine::Progress<'_>,
+) -> Result<RunOutput, RunError> {
     let scenario = &loaded.scenario;
     let model = &loaded.model;
     let x0 = validate(loaded)?;

@@ -49,6 +49,12 @@ pub enum SimError {
         /// Name of the first state that became non-finite, if that was the cause.
         non_finite: Option<String>,
     },
+    /// The caller stopped the run (its progress callback said stop).
+    #[error("stopped at t = {t:.6} s by the caller")]
+    Cancelled {
+        /// Time reached, s.
+        t: f64,
+    },
     /// The step budget ran out.
     #[error(
         "gave up at t = {t:.6} s after {steps} steps (raise solver.max_steps or loosen solver.rtol)"

@@ -1,0 +1,68 @@
+"""Scenario.sweep, Scenario.robust and Scenario.export_fmu: the sweep's
+linear verdicts agree point by point with Scenario.modes on the same
+overrides, the tolerance analysis's summary counts its own samples, and the
+FMU holds the scenario's model description and a shared library."""
+
+import os
+import zipfile
+
+import numpy
+import pytest
+
+import fistage
+
+
+def small_sweep(root):
+    text = (root / "scenarios/paper/fig06a_rigid_vp20.toml").read_text()
+    text = text.replace('analysis = "both"', 'analysis = "linear"').replace("points = 24", "points = 4")
+    return fistage.Scenario.from_toml(text, base_dir=root / "scenarios/paper")
+
+
+def test_sweep_agrees_with_modes_point_by_point(root):
+    scenario = small_sweep(root)
+    calls = []
+    study = scenario.sweep(threads=2, progress=lambda done, total: calls.append((done, total)))
+    assert len(study) == 16 and study["controller.k"].dtype == numpy.float64
+    assert sorted(calls)[-1] == (16, 16)
+    for point in study.points:
+        one = scenario.with_overrides({"controller.k": point["controller.k"],
+                                       "controller.c": point["controller.c"]})
+        modes = one.modes()
+        assert modes["stable"] == point["stable_linear"], point
+        assert modes["max_real_part"] == pytest.approx(point["max_real_eig"], rel=1e-9, abs=1e-9)
+    assert set(study["stable_linear"]) == {True, False}, "the grid crosses the stability boundary"
+
+
+def test_robust_summary_counts_its_samples(root):
+    scenario = fistage.load(root / "scenarios/robust/fig05b_population.toml")
+    study = scenario.robust(samples=32, seed=3)
+    summary = study.summary
+    assert summary["samples"] == 32 and summary["seed"] == 3 and len(study) == 32
+    unstable = numpy.count_nonzero(study["stable_linear"] == False)  # noqa: E712
+    assert summary["p_unstable_linear"]["estimate"] == pytest.approx(unstable / 32)
+    low, high = summary["p_unstable_linear"]["ci95"]
+    assert low <= unstable / 32 <= high
+    nominal = {p["path"]: p["value"] for p in scenario.parameters()}
+    k_x = study["overrides.isolator.k_x"]
+    assert numpy.all(numpy.abs(k_x / nominal["overrides.isolator.k_x"] - 1.0) <= 0.3 + 1e-12)
+    again = scenario.robust(samples=32, seed=3)
+    assert numpy.array_equal(again["max_real_eig"], study["max_real_eig"]), "seeded"
+
+
+def test_export_fmu_packages_the_scenario(root, tmp_path):
+    library = next((p for p in [root / "target/release/libfistage_fmi.so",
+                                root / "target/debug/libfistage_fmi.so"] if p.is_file()), None)
+    if library is None and os.environ.get("FISTAGE_SYSTEM_TESTS") != "required":
+        pytest.skip("SKIPPED: no libfistage_fmi.so (cargo build -p fistage-fmi)")
+    scenario = fistage.load(root / "scenarios/paper/fig05b_fi.toml")
+    path = scenario.export_fmu(tmp_path / "stage.fmu")
+    with zipfile.ZipFile(path) as fmu:
+        names = fmu.namelist()
+        description = fmu.read("modelDescription.xml").decode()
+    assert "modelDescription.xml" in names
+    assert any(n.startswith("binaries/linux64/") and n.endswith(".so") for n in names)
+    assert "servo_force" in description and 'fmiVersion="2.0"' in description
+    with pytest.raises(fistage.Error, match="overrides"):
+        scenario.with_overrides({"controller.c": 10.0}).export_fmu(tmp_path / "other.fmu")
+    with pytest.raises(fistage.Error, match="not found"):
+        scenario.export_fmu(tmp_path / "x.fmu", library=tmp_path / "missing.so")
