@@ -90,3 +90,74 @@ pub fn record_table(repeat: usize) -> anyhow::Result<()> {
     }
     Ok(())
 }
+
+/// Seeds of the coverage table.
+const COVERAGE_SEEDS: u64 = 20;
+
+/// The Monte Carlo coverage of the record fit's 95% intervals: Table 1's
+/// stage, 20 records each with its own 0.01 N (RMS, 50 ms) unmeasured force,
+/// fitted with the default 10 ms horizon and as a pure output error. Per
+/// parameter: the RMS relative error, the median relative standard error
+/// (block jackknife and Jacobian-only), and how many of the 20 intervals hold the
+/// truth.
+pub fn coverage_table() -> anyhow::Result<()> {
+    let truth_lugre = LugreParams::paper_table1();
+    let truth = Theta::new(&truth_lugre, 1.5);
+    println!(
+        "Coverage of the record fit's 95% intervals: Table 1, 7 s at 10 kHz, 1 nm encoder, 0.01 N RMS unmeasured force (50 ms), {COVERAGE_SEEDS} seeds\n"
+    );
+    println!(
+        "| horizon | parameter | RMS error | median s.e. (jackknife) | median s.e. (Jacobian only) | covered (jackknife) | covered (Jacobian only) |"
+    );
+    println!("|---|---|---:|---:|---:|---:|---:|");
+    for (label, horizon) in [("10 ms", Some(10e-3)), ("whole (pure OE)", None)] {
+        let mut errors = vec![Vec::new(); 7];
+        let mut se = vec![Vec::new(); 7];
+        let mut se_iid = vec![Vec::new(); 7];
+        let mut covered = [0usize; 7];
+        let mut covered_iid = [0usize; 7];
+        for seed in 1..=COVERAGE_SEEDS {
+            let synth = RecordSynth {
+                errors: LabErrors {
+                    disturbance_rms: 0.01,
+                    seed,
+                    ..LabErrors::encoder()
+                },
+                ..RecordSynth::new(truth_lugre, 1.5)
+            };
+            let (record, _) = synth.generate()?;
+            let options = RecordOptions {
+                horizon,
+                ..RecordOptions::default()
+            };
+            let fit = fit_record(&record, &options, &mut |_| true)?;
+            for (j, p) in RecordParam::ALL.iter().enumerate() {
+                let t = truth.get(*p);
+                let e = fit.estimate(*p);
+                errors[j].push(e.value / t - 1.0);
+                se[j].push(e.std_error.unwrap_or(f64::NAN) / t);
+                let iid = fit.iid_std_errors.get(j).copied().flatten();
+                se_iid[j].push(iid.unwrap_or(f64::NAN) / t);
+                covered[j] += usize::from(e.covers(t));
+                covered_iid[j] += usize::from(iid.is_some_and(|s| (e.value - t).abs() <= 1.96 * s));
+            }
+        }
+        for (j, p) in RecordParam::ALL.iter().enumerate() {
+            let rms =
+                (errors[j].iter().map(|e| e * e).sum::<f64>() / errors[j].len() as f64).sqrt();
+            let median = |v: &mut Vec<f64>| {
+                v.sort_by(f64::total_cmp);
+                v[v.len() / 2]
+            };
+            println!(
+                "| {label} | {} | {rms:.2e} | {:.2e} | {:.2e} | {}/{COVERAGE_SEEDS} | {}/{COVERAGE_SEEDS} |",
+                p.name(),
+                median(&mut se[j]),
+                median(&mut se_iid[j]),
+                covered[j],
+                covered_iid[j]
+            );
+        }
+    }
+    Ok(())
+}

@@ -15,15 +15,17 @@
 //!   and sigma1 are the least certain first estimates.
 //! * Loss L2, or Huber's with its threshold at 1.345 robust scales.
 //! * Intervals: the residuals of a record are correlated (quantisation,
-//!   unmeasured forces), so Jacobian-only intervals come out far too narrow.
-//!   The covariance is the cluster sandwich `H^-1 (sum_b g_b g_b^T) H^-1`
-//!   with `g_b` the score of block `b` (0.1 s blocks with a horizon; without
-//!   one a segment with its rest, or one of 20 equal blocks when the record
-//!   has fewer than 8 segments), and Student's t with (blocks - 1) degrees
-//!   of freedom. The Jacobian-only standard errors are kept alongside for
-//!   comparison. On records with an unmeasured force the sandwich is far
-//!   closer than the Jacobian-only intervals but still too narrow for the
-//!   friction levels (RESULTS.md gives the measured coverage).
+//!   unmeasured forces), so Jacobian-only intervals come out far too narrow
+//!   (they cover the truth in 0 to 3 of 20 disturbed records). The
+//!   covariance is the linearised delete-one-block jackknife `(G-1)/G sum_b
+//!   d_b d_b^T`, `d_b = (H - H_b)^-1 g_b` with `g_b` and `H_b` the score and
+//!   information of block `b` (0.25 s blocks with a horizon; without one a
+//!   segment with its rest, or one of 20 equal blocks when the record has
+//!   fewer than 8 segments), and Student's t with (blocks - 1) degrees of
+//!   freedom. It corrects the plain cluster sandwich, which is too narrow
+//!   where a few blocks hold most of a parameter's information (the
+//!   sliding chirp for sigma2); measured coverage in RESULTS.md. The
+//!   Jacobian-only standard errors are kept alongside for comparison.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -305,9 +307,9 @@ fn periodic_anchors(record: &Record, anchors: &[usize], interval: f64) -> Vec<us
 }
 
 /// Length of a residual block when the position is re-anchored every
-/// horizon, s: ten horizons, and twice the correlation time of the
-/// disturbances the tests use.
-const BLOCK_DURATION: f64 = 0.1;
+/// horizon, s: 25 horizons, five correlation times of the disturbances the
+/// coverage was measured with (`fistage bench --record`).
+const BLOCK_DURATION: f64 = 0.25;
 
 /// Consecutive blocks of `duration` seconds.
 fn equal_blocks(record: &Record, duration: f64) -> Vec<(usize, usize)> {
@@ -497,7 +499,7 @@ impl Problem<'_> {
         out
     }
 
-    /// Cluster-sandwich estimates of every parameter, and the Jacobian-only
+    /// Block-jackknife estimates of every parameter, and the Jacobian-only
     /// standard errors of the free ones.
     fn intervals(
         &self,
@@ -514,21 +516,40 @@ impl Problem<'_> {
         let (h, _) = normal_equations(&outcome.misfit, p, self.loss, threshold);
         let jac = &outcome.misfit.sim.jacobian;
         let r = &outcome.misfit.residual;
-        let mut meat = DMatrix::<f64>::zeros(p, p);
-        for &(a, b) in block_ranges {
-            let mut score = DVector::<f64>::zeros(p);
-            for k in a..b {
-                let w = weight(self.loss, r[k], threshold);
-                for j in 0..p {
-                    score[j] += w * r[k] * jac[k * p + j];
+        let blocks: Vec<(DVector<f64>, DMatrix<f64>)> = block_ranges
+            .iter()
+            .map(|&(a, b)| {
+                let mut score = DVector::<f64>::zeros(p);
+                let mut info = DMatrix::<f64>::zeros(p, p);
+                for k in a..b {
+                    let w = weight(self.loss, r[k], threshold);
+                    let row = &jac[k * p..(k + 1) * p];
+                    for i in 0..p {
+                        score[i] += w * r[k] * row[i];
+                        for j in 0..p {
+                            info[(i, j)] += w * row[i] * row[j];
+                        }
+                    }
                 }
-            }
-            meat += &score * score.transpose();
-        }
+                (score, info)
+            })
+            .collect();
         let g = block_ranges.len() as f64;
-        meat *= g / (g - 1.0).max(1.0);
         let inverse = scaled_inverse(&h);
-        let sandwich = inverse.as_ref().map(|hi| hi * &meat * hi);
+        // Delete-one-block jackknife, linearised: leaving block b out moves
+        // the estimate by (H - H_b)^-1 g_b.
+        let jackknife = inverse.as_ref().map(|hi| {
+            let mut cov = DMatrix::<f64>::zeros(p, p);
+            for (score, info) in &blocks {
+                let without = &h - info;
+                let delta = without
+                    .cholesky()
+                    .map(|c| c.solve(score))
+                    .unwrap_or_else(|| hi * score);
+                cov += &delta * delta.transpose();
+            }
+            cov * ((g - 1.0) / g)
+        });
         let n = r.len() as f64;
         let s2 = outcome.misfit.residual.iter().map(|v| v * v).sum::<f64>() / (n - p as f64);
         let t = t95((g - 1.0).max(1.0));
@@ -540,7 +561,7 @@ impl Problem<'_> {
                 estimates.push((param, Estimate::exact(known_mass.unwrap_or(value))));
                 continue;
             };
-            let se = sandwich
+            let se = jackknife
                 .as_ref()
                 .map(|c| c[(j, j)])
                 .filter(|v| v.is_finite() && *v >= 0.0)

@@ -13,7 +13,7 @@
 //! * [`segments`]: rests, chirps, ramps, holds and steps, from a table or
 //!   found from the force;
 //! * [`start`]: first estimates from the record itself;
-//! * [`fit`]: the output-error fit and its block-sandwich intervals;
+//! * [`fit`]: the output-error fit and its block-jackknife intervals;
 //! * [`report`]: `fit.json`, the table, `override.toml`;
 //! * [`program`] and [`synth`]: lab-style records for tests and planning.
 //!

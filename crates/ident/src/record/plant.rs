@@ -318,6 +318,7 @@ pub fn simulate(
         while next_anchor.peek().is_some_and(|&a| a < k) {
             next_anchor.next();
         }
+        let mut state_moved = false;
         if next_anchor.peek() == Some(&k) && k > 0 {
             integrator.x[0] = record.position[k];
             for j in 0..p {
@@ -332,6 +333,7 @@ pub fn simulate(
                 for j in 0..p {
                     integrator.x[4 + 3 * j] = 0.0;
                 }
+                state_moved = true;
             }
         }
         out.position.push(integrator.x[0]);
@@ -339,7 +341,10 @@ pub fn simulate(
         for j in 0..p {
             out.jacobian.push(integrator.x[3 + 3 * j]);
         }
-        if k + 1 < n {
+        // The last stage of the step is the first of the next unless the
+        // force or the velocity changed here (the position does not enter
+        // the rates).
+        if k + 1 < n && (state_moved || record.force[k] != system.force) {
             system.force = record.force[k];
             integrator.restart(&mut system);
         }

@@ -131,8 +131,8 @@ impl RecordReport {
                 .map(|(p, se)| (p.name().to_string(), *se))
                 .collect(),
             interval_method: format!(
-                "cluster sandwich over {} blocks of consecutive residuals, Student t with {} \
-                 degrees of freedom",
+                "delete-one-block jackknife over {} blocks of consecutive residuals, Student t \
+                 with {} degrees of freedom",
                 fit.blocks,
                 fit.blocks.saturating_sub(1)
             ),
