@@ -51,6 +51,11 @@ pub struct BenchArgs {
     /// simulated 2 s samples on one and two threads.
     #[arg(long)]
     pub robust: bool,
+    /// Time the Python package's `Scenario.run()` against the program on
+    /// fig05b in one invocation (`--python` names the interpreter; default
+    /// `target/py-venv/bin/python`, else `python3`).
+    #[arg(long = "python-run")]
+    pub python_run: bool,
     /// Time the record fit (`identify record`) on 7 s records at 10 kHz, and
     /// measure its intervals' coverage on 20 disturbed records (both
     /// horizons: about 90 s).
@@ -178,6 +183,17 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     }
     if args.stiffness {
         return stiffness_table(args);
+    }
+    if args.python_run {
+        let python = args.python.clone().unwrap_or_else(|| {
+            let venv = PathBuf::from("target/py-venv/bin/python");
+            if venv.is_file() {
+                venv
+            } else {
+                PathBuf::from("python3")
+            }
+        });
+        return crate::bench_python::python_table(&python);
     }
     if args.record {
         crate::bench_record::record_table(args.repeat)?;
