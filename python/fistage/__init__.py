@@ -114,7 +114,7 @@ def _cell(text):
 def _sweep(self, threads=None, progress=None):
     """Runs the scenario's ``[sweep]`` grid as ``fistage sweep`` does (the
     interpreter released, ``threads`` threads, default all);
-    ``progress(done, total)`` after each point. Returns a :class:`Study`
+    ``progress(done, total)`` after each chunk of points; Ctrl-C stops it. Returns a :class:`Study`
     with the columns of points.csv (each axis, then stable_linear,
     stable_sim, amplitude, max_real_eig, bistable)."""
     return Study(self._sweep(threads=threads, progress=progress))

@@ -47,8 +47,10 @@ class Scenario:
         """A new scenario with these parameter-table values, each checked by its rule."""
     def parameters(self) -> List[Dict[str, Any]]:
         """Every parameter-table entry: path, value, unit, rule, description."""
-    def run(self, rtol: Optional[float] = None, engine: Optional[str] = None) -> Result:
-        """Simulates the scenario (interpreter released) and returns its signals."""
+    def run(self, rtol: Optional[float] = None, engine: Optional[str] = None,
+            progress: Optional[Callable[[float], None]] = None) -> Result:
+        """Simulates the scenario (interpreter released) and returns its signals; progress(fraction)
+        now and then; Ctrl-C or an exception in the callback stops the run."""
     def modes(self, equilibrium: str = "slipping") -> Dict[str, Any]:
         """The linearisation at an equilibrium, as modes.json, with numpy eigenvalues."""
     def sweep(self, threads: Optional[int] = None,

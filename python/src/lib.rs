@@ -241,7 +241,8 @@ impl Scenario {
 
     /// sweep(threads=None, progress=None) -> (points.csv text): the
     /// scenario's `[sweep]` grid as `fistage sweep` computes it, on `threads`
-    /// threads (default: all); `progress(done, total)` after each point.
+    /// threads (default: all); `progress(done, total)` after each chunk of
+    /// points; Ctrl-C stops it.
     /// The Python side turns it into numpy columns.
     #[pyo3(signature = (threads=None, progress=None))]
     fn _sweep(

@@ -1,12 +1,12 @@
 //! The studies of a scenario from Python: its `[sweep]` grid and its
 //! `[robust]` tolerance analysis, computed as `fistage sweep` and `fistage
-//! robust` compute them (the interpreter released), and the scenario
-//! packaged as an FMU. Results come back as the table text the program
+//! robust` compute them (the interpreter released, in chunks between which
+//! Ctrl-C and the progress callback are heard), and the scenario packaged
+//! as an FMU. Results come back as the table text the program
 //! writes (`points.csv`, `samples.csv`) and `summary.json`; the Python side
 //! turns them into numpy columns.
 
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
 
 use fistage_analysis::robust::{RobustSpec, Summary, table};
 use fistage_analysis::sweep::{SweepSpec, header, row, run_points};
@@ -15,40 +15,28 @@ use pyo3::prelude::*;
 
 use crate::{Error, LoadError_};
 
-/// Calls `progress(done, total)` from whichever thread finished a point,
-/// keeping the first exception it raises.
-struct Progress {
-    callback: Option<Py<PyAny>>,
+/// Runs `compute` over `0..total` in chunks of a few points per thread,
+/// with the interpreter released; between chunks it takes the interpreter
+/// back, stops on Ctrl-C (or an exception from `progress`) and calls
+/// `progress(done, total)`.
+fn in_chunks<T: Send>(
+    py: Python<'_>,
     total: usize,
-    done: Mutex<(usize, Option<PyErr>)>,
-}
-
-impl Progress {
-    fn new(callback: Option<Py<PyAny>>, total: usize) -> Self {
-        Self {
-            callback,
-            total,
-            done: Mutex::new((0, None)),
+    threads: usize,
+    progress: Option<&Py<PyAny>>,
+    compute: impl Fn(&[usize]) -> Vec<T> + Sync,
+) -> PyResult<Vec<T>> {
+    let chunk = (4 * threads).max(8);
+    let mut results = Vec::with_capacity(total);
+    let indices: Vec<usize> = (0..total).collect();
+    for part in indices.chunks(chunk) {
+        results.extend(py.detach(|| compute(part)));
+        py.check_signals()?;
+        if let Some(callback) = progress {
+            callback.call1(py, (results.len(), total))?;
         }
     }
-
-    fn tick(&self) {
-        let Ok(mut state) = self.done.lock() else {
-            return;
-        };
-        state.0 += 1;
-        if let (Some(callback), None) = (&self.callback, &state.1) {
-            let done = state.0;
-            if let Err(e) = Python::attach(|py| callback.call1(py, (done, self.total))) {
-                state.1 = Some(e);
-            }
-        }
-    }
-
-    /// The callback's exception, if it raised one.
-    fn raised(self) -> Option<PyErr> {
-        self.done.into_inner().ok().and_then(|s| s.1)
-    }
+    Ok(results)
 }
 
 fn threads_or_all(threads: Option<usize>) -> PyResult<usize> {
@@ -72,16 +60,9 @@ pub fn sweep(
     spec.check_against(&loaded.scenario, robot)
         .map_err(|e| LoadError_::new_err(e.to_string()))?;
     let threads = threads_or_all(threads)?;
-    let indices: Vec<usize> = (0..spec.len()).collect();
-    let ticks = Progress::new(progress, indices.len());
-    let results = py.detach(|| {
-        run_points(loaded, robot, &spec, &indices, threads, &|_, _| {
-            ticks.tick()
-        })
-    });
-    if let Some(e) = ticks.raised() {
-        return Err(e);
-    }
+    let results = in_chunks(py, spec.len(), threads, progress.as_ref(), |part| {
+        run_points(loaded, robot, &spec, part, threads, &|_, _| {})
+    })?;
     let lines: Vec<String> = std::iter::once(header(&spec))
         .chain(results.iter().map(row))
         .collect();
@@ -102,12 +83,9 @@ pub fn robust(
     let spec = RobustSpec::from_scenario(&loaded.scenario, robot, samples, seed)
         .map_err(|e| LoadError_::new_err(e.to_string()))?;
     let threads = threads_or_all(threads)?;
-    let indices: Vec<usize> = (0..spec.samples).collect();
-    let ticks = Progress::new(progress, indices.len());
-    let results = py.detach(|| spec.run(loaded, robot, &indices, threads, &|_, _| ticks.tick()));
-    if let Some(e) = ticks.raised() {
-        return Err(e);
-    }
+    let results = in_chunks(py, spec.samples, threads, progress.as_ref(), |part| {
+        spec.run(loaded, robot, part, threads, &|_, _| {})
+    })?;
     let lines: Vec<String> = std::iter::once(table::header(&spec))
         .chain(results.iter().map(table::row))
         .collect();

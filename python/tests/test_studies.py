@@ -66,3 +66,18 @@ def test_export_fmu_packages_the_scenario(root, tmp_path):
         scenario.with_overrides({"controller.c": 10.0}).export_fmu(tmp_path / "other.fmu")
     with pytest.raises(fistage.Error, match="not found"):
         scenario.export_fmu(tmp_path / "x.fmu", library=tmp_path / "missing.so")
+
+
+def test_ctrl_c_stops_a_long_tolerance_analysis(root):
+    import signal
+    import threading
+    import time
+
+    scenario = fistage.load(root / "scenarios/robust/fig05b_population.toml")
+    timer = threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT))
+    start = time.monotonic()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        scenario.robust(samples=65536, threads=1)
+    timer.join()
+    assert time.monotonic() - start < 2.5
