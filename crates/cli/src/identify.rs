@@ -130,8 +130,8 @@ pub(crate) struct OutputArgs {
     /// Print the JSON report instead of the table.
     #[arg(long)]
     pub(crate) json: bool,
-    /// Write fit.json, override.toml, data_vs_fit.csv, fit_curve.csv and the
-    /// data-vs-fit plot fit.svg / fit.png into DIR.
+    /// Write fit.json, override.toml, data_vs_fit.csv (and fit_curve.csv for
+    /// curves and FRFs) and the data-vs-fit plot fit.svg / fit.png into DIR.
     #[arg(long, value_name = "DIR")]
     pub(crate) out: Option<PathBuf>,
     /// Friction element that override.toml applies to.
