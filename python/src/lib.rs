@@ -275,11 +275,10 @@ impl Scenario {
 
     /// export_fmu(path, library=None) -> path: the scenario as an FMI 2.0
     /// Co-Simulation FMU, as `fistage fmu` packages it. The FMU's shared
-    /// library is `library`, else $FISTAGE_FMI_LIBRARY, else the one built
-    /// in the repository this package came from (`cargo build --release -p
-    /// fistage-fmi`). Overrides set from Python are not in the scenario's
-    /// text, so a scenario with overrides is refused: an importer sets the
-    /// FMU's parameters itself.
+    /// library is `library`, else the one built with this package.
+    /// Overrides set from Python are not in the scenario's text, so a
+    /// scenario with overrides is refused: an importer sets the FMU's
+    /// parameters itself.
     #[pyo3(signature = (path, library=None))]
     fn export_fmu(&self, path: PathBuf, library: Option<PathBuf>) -> PyResult<PathBuf> {
         if !self.overrides.is_empty() {

@@ -95,53 +95,46 @@ pub fn robust(
     Ok((text, json))
 }
 
-/// Where the FMU's shared library is looked for: `library`, then the
-/// `FISTAGE_FMI_LIBRARY` environment variable, then the repository this
-/// package was built from (`target/release`, `target/debug`).
-fn fmu_library(library: Option<PathBuf>) -> PyResult<PathBuf> {
-    let name = fistage_fmi::package::LIBRARY_FILE;
-    if let Some(given) = library {
-        return if given.is_file() {
-            Ok(given)
-        } else {
-            Err(Error::new_err(format!(
-                "library={}: not found",
-                given.display()
-            )))
-        };
+/// The FMU's shared library, built with this package (see `build.rs`).
+const EMBEDDED_LIBRARY: &[u8] = include_bytes!(env!("FISTAGE_FMI_EMBEDDED"));
+
+/// A file removed when dropped.
+struct TemporaryFile(PathBuf);
+
+impl Drop for TemporaryFile {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
     }
-    let repository = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let candidates: Vec<PathBuf> = std::env::var_os("FISTAGE_FMI_LIBRARY")
-        .map(PathBuf::from)
-        .into_iter()
-        .chain(["release", "debug"].map(|p| repository.join("target").join(p).join(name)))
-        .collect();
-    candidates
-        .iter()
-        .find(|p| p.is_file())
-        .cloned()
-        .ok_or_else(|| {
-            Error::new_err(format!(
-                "{name} not found (looked in {}): build it in the repository with `cargo build \
-                 --release -p fistage-fmi`, or pass library=... or set FISTAGE_FMI_LIBRARY",
-                candidates
-                    .iter()
-                    .map(|p| p.display().to_string())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ))
-        })
 }
 
 /// Packages the scenario (its text, its robot) as an FMI 2.0
-/// Co-Simulation FMU at `path`.
+/// Co-Simulation FMU at `path`, with `library` as its binary or the one
+/// built with this package.
 pub fn export_fmu(
     text: &str,
     file: &Path,
     path: &Path,
     library: Option<PathBuf>,
 ) -> PyResult<PathBuf> {
-    let library = fmu_library(library)?;
+    let (_temporary, library) = match library {
+        Some(given) if given.is_file() => (None, given),
+        Some(given) => {
+            return Err(Error::new_err(format!(
+                "library={}: not found",
+                given.display()
+            )));
+        }
+        None => {
+            let nanos = std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.subsec_nanos());
+            let file =
+                std::env::temp_dir().join(format!("fistage-fmi-{}-{nanos}.so", std::process::id()));
+            std::fs::write(&file, EMBEDDED_LIBRARY)
+                .map_err(|e| Error::new_err(format!("{}: cannot write: {e}", file.display())))?;
+            (Some(TemporaryFile(file.clone())), file)
+        }
+    };
     let bytes = fistage_fmi::build_fmu_from_text(text, file, &library)
         .map_err(|e| Error::new_err(e.to_string()))?;
     std::fs::write(path, bytes)

@@ -50,10 +50,7 @@ def test_robust_summary_counts_its_samples(root):
 
 
 def test_export_fmu_packages_the_scenario(root, tmp_path):
-    library = next((p for p in [root / "target/release/libfistage_fmi.so",
-                                root / "target/debug/libfistage_fmi.so"] if p.is_file()), None)
-    if library is None and os.environ.get("FISTAGE_SYSTEM_TESTS") != "required":
-        pytest.skip("SKIPPED: no libfistage_fmi.so (cargo build -p fistage-fmi)")
+    """The package carries the FMU's library itself: nothing else is needed."""
     scenario = fistage.load(root / "scenarios/paper/fig05b_fi.toml")
     path = scenario.export_fmu(tmp_path / "stage.fmu")
     with zipfile.ZipFile(path) as fmu:

@@ -1,0 +1,37 @@
+//! Builds the FMU's shared library (`fistage-fmi`, from the main workspace)
+//! so that `Scenario.export_fmu` needs nothing beside the installed
+//! package: the library's bytes are embedded in the extension module.
+
+use std::env;
+use std::path::PathBuf;
+use std::process::Command;
+
+fn main() {
+    let manifest_dir = PathBuf::from(env::var("CARGO_MANIFEST_DIR").expect("set by cargo"));
+    let root = manifest_dir.join("..");
+    let target = PathBuf::from(env::var("OUT_DIR").expect("set by cargo")).join("fmi-target");
+    let cargo = env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let status = Command::new(cargo)
+        .args(["build", "--release", "--locked", "-p", "fistage-fmi"])
+        .arg("--manifest-path")
+        .arg(root.join("Cargo.toml"))
+        .arg("--target-dir")
+        .arg(&target)
+        .args(["--config", "profile.release.debug=false"])
+        .env_remove("CARGO_TARGET_DIR")
+        .env_remove("CARGO_ENCODED_RUSTFLAGS")
+        .env_remove("RUSTFLAGS")
+        .status()
+        .expect("cargo runs");
+    assert!(status.success(), "building fistage-fmi for the FMU failed");
+    let library = target.join("release").join("libfistage_fmi.so");
+    println!("cargo:rustc-env=FISTAGE_FMI_EMBEDDED={}", library.display());
+    for path in [
+        "../ffi",
+        "../crates/model",
+        "../crates/sim",
+        "../Cargo.lock",
+    ] {
+        println!("cargo:rerun-if-changed={path}");
+    }
+}
