@@ -253,7 +253,10 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
 }
 
 /// Median time of `repeat` calls, after one warm-up call.
-fn median_time(repeat: usize, mut f: impl FnMut() -> anyhow::Result<()>) -> anyhow::Result<f64> {
+pub(crate) fn median_time(
+    repeat: usize,
+    mut f: impl FnMut() -> anyhow::Result<()>,
+) -> anyhow::Result<f64> {
     f()?;
     let mut times = Vec::with_capacity(repeat);
     for _ in 0..repeat.max(1) {

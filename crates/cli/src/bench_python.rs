@@ -7,7 +7,6 @@
 
 use std::path::Path;
 use std::process::Command;
-use std::time::Instant;
 
 use anyhow::{Context, bail};
 
@@ -20,7 +19,7 @@ const REPEATS: usize = 15;
 /// Prints the Markdown table; `python` must import `fistage`.
 pub fn python_table(python: &Path) -> anyhow::Result<()> {
     let scenario = Path::new(SCENARIO);
-    let rust = median_of(REPEATS, || {
+    let rust = crate::bench::median_time(REPEATS, || {
         let loaded = fistage_model::load(scenario)?;
         let output = fistage_sim::run_scenario(&loaded, &mut fistage_sim::no_progress)?;
         let _ = fistage_sim::summary::document(&loaded, &output);
@@ -64,16 +63,4 @@ pub fn python_table(python: &Path) -> anyhow::Result<()> {
         py / rust
     );
     Ok(())
-}
-
-fn median_of(repeat: usize, mut f: impl FnMut() -> anyhow::Result<()>) -> anyhow::Result<f64> {
-    f()?;
-    let mut times = Vec::with_capacity(repeat);
-    for _ in 0..repeat {
-        let start = Instant::now();
-        f()?;
-        times.push(start.elapsed().as_secs_f64());
-    }
-    times.sort_by(f64::total_cmp);
-    Ok(times[times.len() / 2])
 }

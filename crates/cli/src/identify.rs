@@ -586,7 +586,7 @@ fn write_plot(
 const CURVE_POINTS: usize = 300;
 
 /// The file name of a data source, for plot titles.
-fn short_name(source: &str) -> &str {
+pub(crate) fn short_name(source: &str) -> &str {
     Path::new(source)
         .file_name()
         .and_then(|n| n.to_str())

@@ -24,7 +24,7 @@ use fistage_plot::{Figure, Panel, Series, write_figure};
 
 use crate::identify::{
     OutputArgs, SimulateArgs, check_element, nothing_written, print_report, refuse_undetermined,
-    unit_flag,
+    short_name, unit_flag,
 };
 use crate::output::OutputFolder;
 
@@ -231,13 +231,6 @@ fn fit_figure(record: &Record, fit: &RecordFit) -> Figure {
             ),
         ],
     )
-}
-
-fn short_name(source: &str) -> &str {
-    Path::new(source)
-        .file_name()
-        .and_then(|n| n.to_str())
-        .unwrap_or(source)
 }
 
 /// Runs `fistage identify simulate-record`.
