@@ -53,6 +53,14 @@ impl RecordLab {
         let friction = stage.friction();
         let (time, force, segments) = lab_program(friction.f_c, friction.f_s, self.dt);
         let n = time.len();
+        if n < fistage_ident::record::data::MIN_SAMPLES {
+            return Err(IdentError::InvalidOption(format!(
+                "a sample interval of {} s leaves the 7 s program {n} samples; a record needs at \
+                 least {}",
+                self.dt,
+                fistage_ident::record::data::MIN_SAMPLES
+            )));
+        }
         let disturbance = self.errors.disturbance(n, self.dt);
         let excitation = HeldForce {
             time: time.clone(),

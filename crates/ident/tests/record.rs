@@ -198,3 +198,28 @@ fn intervals_hold_on_disturbed_records() {
         "Jacobian-only intervals covered {covered_iid} of 70"
     );
 }
+
+/// A fit stopped by its iteration limit is no answer: the report names every
+/// fitted parameter, so the program refuses it.
+#[test]
+fn an_unconverged_fit_is_named() {
+    let (record, _) = RecordSynth::new(small_stage(), 0.25).generate().unwrap();
+    let options = RecordOptions {
+        max_iterations: 1,
+        ..RecordOptions::default()
+    };
+    let fit = fit_record(&record, &options, &mut |_| true).unwrap();
+    assert!(!fit.converged);
+    let report = fistage_ident::record::RecordReport::new(&record, &fit);
+    assert_eq!(
+        report.not_identifiable.len(),
+        7,
+        "{:?}",
+        report.not_identifiable
+    );
+    assert!(
+        report.not_identifiable[0]
+            .reason
+            .contains("did not converge")
+    );
+}

@@ -134,6 +134,10 @@ pub struct RecordFit {
     pub blocks: usize,
     /// Levenberg-Marquardt iterations.
     pub iterations: usize,
+    /// Whether the output-error iterations stopped on their own (false:
+    /// they hit [`RecordOptions::max_iterations`], and the answer is not a
+    /// minimum).
+    pub converged: bool,
     /// Plant right-hand-side evaluations in all.
     pub rhs_evaluations: u64,
     /// The loss.
@@ -291,6 +295,7 @@ pub fn fit_record(
         segments,
         blocks: block_ranges.len(),
         iterations: outcome.iterations,
+        converged: outcome.converged,
         rhs_evaluations: outcome.rhs_evaluations,
         loss: options.loss,
     })
@@ -337,6 +342,8 @@ struct Outcome {
     misfit: Misfit,
     iterations: usize,
     rhs_evaluations: u64,
+    /// Whether the iterations stopped on their own before the limit.
+    converged: bool,
 }
 
 /// What every simulation of one fit shares.
@@ -418,6 +425,7 @@ impl Problem<'_> {
         let mut rhs_evaluations = current.sim.rhs_evaluations;
         let mut lambda = 1e-3;
         let mut iterations = 0;
+        let mut finished = false;
         while iterations < max_iterations {
             iterations += 1;
             if self.loss == Loss::Huber {
@@ -475,6 +483,7 @@ impl Problem<'_> {
                 }
             }
             if !accepted || small_step {
+                finished = true;
                 break;
             }
         }
@@ -483,6 +492,7 @@ impl Problem<'_> {
             misfit: current,
             iterations,
             rhs_evaluations,
+            converged: finished,
         })
     }
 

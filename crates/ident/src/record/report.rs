@@ -99,10 +99,20 @@ impl RecordReport {
                 });
             }
         }
-        let mut warnings: Vec<String> = fit.start.notes.clone();
-        if fit.iterations >= 2 * 100 {
-            warnings.push("the iterations hit their limit".into());
+        if !fit.converged {
+            for p in &fit.free {
+                if !not_identifiable.iter().any(|n| n.parameter == p.name()) {
+                    not_identifiable.push(NotIdentifiable {
+                        parameter: p.name().into(),
+                        reason: format!(
+                            "the fit did not converge in {} iterations",
+                            fit.iterations
+                        ),
+                    });
+                }
+            }
         }
+        let warnings: Vec<String> = fit.start.notes.clone();
         let take = |name: &str, reports: &mut Vec<(&str, ParamReport)>| {
             let i = reports.iter().position(|(n, _)| *n == name).unwrap_or(0);
             reports.remove(i).1
