@@ -84,7 +84,7 @@ def frf(freq, response=None, magnitude=None, phase=None, mass=None, sigma2=None)
     return Fit(json.loads(text))
 
 
-def record(t, force, position, mass=None, loss="l2", horizon=0.01, progress=None):
+def record(t, force, position, mass=None, loss="l2", horizon=0.01, progress=None, closed_loop=None):
     """Fits all six LuGre parameters (and the mass unless given, kg) to a
     recorded run by output error on the position (paper Eq. 31): t in s,
     force in N held over each sample interval (force[k] acts on
@@ -93,11 +93,15 @@ def record(t, force, position, mass=None, loss="l2", horizon=0.01, progress=None
     estimates come from the record. loss "l2" or "huber"; horizon (s) is how
     often the simulated position is re-anchored to the encoder (None: pure
     output error). progress(iteration, rms) is called after every
-    iteration; Ctrl-C stops the fit. The result also holds the simulated
-    position as ``fit.simulated``."""
+    iteration; Ctrl-C stops the fit. closed_loop names the scenario (.toml)
+    whose servo drove the run: the plant is then driven by that servo law
+    on the simulated encoder, the logged force giving only the first
+    estimates. The result also holds the simulated position as
+    ``fit.simulated``."""
     text, simulated = _fistage._record(
         _floats("t", t), _floats("force", force), _floats("position", position),
-        mass=mass, loss=loss, horizon=horizon, progress=progress)
+        mass=mass, loss=loss, horizon=horizon, progress=progress,
+        closed_loop=None if closed_loop is None else str(closed_loop))
     fit = Fit(json.loads(text))
     fit.simulated = numpy.asarray(simulated, dtype=numpy.float64)
     return fit
@@ -111,14 +115,18 @@ def read_record(path):
     return tuple(numpy.asarray(a, dtype=numpy.float64) for a in (t, force, position))
 
 
-def simulate_record(stage, seed=1, quantum=1e-9, noise=0.0, disturbance=0.0, rate=10000.0):
+def simulate_record(stage, seed=1, quantum=1e-9, noise=0.0, disturbance=0.0, rate=10000.0,
+                    closed_loop=False, duration=None):
     """A lab-style record of the open-loop stage of a robot (.urdf) or
     scenario (.toml) file, as ``fistage identify simulate-record`` makes it:
     small and large chirps, breakaway ramps, holds, steps and rests, 7 s;
     encoder step quantum (m), white position noise (m), an unmeasured force
-    disturbance (RMS, N). Returns (t, force, position, truth), truth the
+    disturbance (RMS, N). With closed_loop, a run of the scenario's own
+    servo along its reference over duration s (the scenario's by default),
+    the disturbance unlogged. Returns (t, force, position, truth), truth the
     stage's parameters by name."""
     t, force, position, truth = _fistage._simulate_record(
-        str(stage), seed=seed, quantum=quantum, noise=noise, disturbance=disturbance, rate=rate)
+        str(stage), seed=seed, quantum=quantum, noise=noise, disturbance=disturbance, rate=rate,
+        closed_loop=closed_loop, duration=duration)
     arrays = tuple(numpy.asarray(a, dtype=numpy.float64) for a in (t, force, position))
     return arrays + (json.loads(truth),)

@@ -6,7 +6,7 @@
 use fistage_analysis::lab::LabStage;
 use fistage_analysis::record_lab::RecordLab;
 use fistage_ident::record::{
-    FitProgress, LabErrors, MassChoice, Record, RecordOptions, RecordReport, fit_record,
+    FitProgress, LabErrors, MassChoice, Record, RecordOptions, RecordReport, ServoLoop, fit_record,
     read_record,
 };
 use fistage_ident::{
@@ -135,7 +135,7 @@ pub fn _frf(
 /// iteration (the interpreter held only then); Ctrl-C, or an exception in
 /// the callback, stops the fit.
 #[pyfunction]
-#[pyo3(signature = (time, force, position, mass = None, loss = "l2", horizon = Some(0.01), progress = None))]
+#[pyo3(signature = (time, force, position, mass = None, loss = "l2", horizon = Some(0.01), progress = None, closed_loop = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn _record(
     py: Python<'_>,
@@ -146,6 +146,7 @@ pub fn _record(
     loss: &str,
     horizon: Option<f64>,
     progress: Option<Py<PyAny>>,
+    closed_loop: Option<std::path::PathBuf>,
 ) -> PyResult<(String, Vec<f64>)> {
     let loss = match loss {
         "l2" => Loss::L2,
@@ -157,10 +158,18 @@ pub fn _record(
         }
     };
     let record = Record::from_arrays("arrays", time, force, position).map_err(ident_error)?;
+    let closed_loop = match closed_loop {
+        Some(path) => Some(
+            ServoLoop::from_scenario(&path)
+                .map_err(|e| crate::LoadError_::new_err(e.to_string()))?,
+        ),
+        None => None,
+    };
     let options = RecordOptions {
         mass: mass.map_or(MassChoice::Fit, MassChoice::Known),
         loss,
         horizon,
+        closed_loop,
         ..RecordOptions::default()
     };
     let mut raised: Option<PyErr> = None;
@@ -202,10 +211,13 @@ pub fn _read_record(path: std::path::PathBuf) -> PyResult<(Vec<f64>, Vec<f64>, V
 type SimulatedRecord = (Vec<f64>, Vec<f64>, Vec<f64>, String);
 
 /// A lab-style record (chirps, breakaway ramps, holds, steps, rests) of the
-/// open-loop stage of a robot or scenario file: time (s), force (N),
-/// position (m), and the stage's true parameters as JSON.
+/// open-loop stage of a robot or scenario file, or with `closed_loop` a run
+/// of the scenario's own servo (over `duration` s, the scenario's when
+/// None): time (s), force (N), position (m), and the stage's true
+/// parameters as JSON.
 #[pyfunction]
-#[pyo3(signature = (stage, seed = 1, quantum = 1e-9, noise = 0.0, disturbance = 0.0, rate = 10_000.0))]
+#[pyo3(signature = (stage, seed = 1, quantum = 1e-9, noise = 0.0, disturbance = 0.0, rate = 10_000.0, closed_loop = false, duration = None))]
+#[allow(clippy::too_many_arguments)]
 pub fn _simulate_record(
     py: Python<'_>,
     stage: std::path::PathBuf,
@@ -214,6 +226,8 @@ pub fn _simulate_record(
     noise: f64,
     disturbance: f64,
     rate: f64,
+    closed_loop: bool,
+    duration: Option<f64>,
 ) -> PyResult<SimulatedRecord> {
     for (name, value) in [
         ("quantum", quantum),
@@ -240,8 +254,18 @@ pub fn _simulate_record(
         seed,
         ..LabErrors::exact()
     };
-    let (record, _) = py
-        .detach(|| lab.measure(&lab_stage))
+    if let Some(d) = duration
+        && !(d.is_finite() && d > 0.0)
+    {
+        return Err(Error::new_err(format!(
+            "duration must be a positive number of s, got {d}"
+        )));
+    }
+    let record = py
+        .detach(|| match closed_loop {
+            true => lab.measure_closed_loop(&stage, duration),
+            false => lab.measure(&lab_stage).map(|(record, _)| record),
+        })
         .map_err(|e| crate::SimulationError::new_err(e.to_string()))?;
     let p = lab_stage.friction();
     let truth = serde_json::json!({

@@ -85,6 +85,22 @@ def test_record_fit_recovers_the_rigid_stage_from_arrays_and_files(root, tmp_pat
     assert known["f_c"]["value"] == pytest.approx(truth["f_c"], rel=1e-3)
 
 
+def test_closed_loop_record_is_fitted_inside_the_scenario_servo(root):
+    """A run of the shipped sine-tracking scenario's servo gives the stage's
+    parameters back when the fit closes the same servo around its plant;
+    a stage with FI is refused by name."""
+    scenario = root / "scenarios/identify/closed_loop_sine.toml"
+    t, force, position, truth = fistage.identify.simulate_record(scenario, closed_loop=True, duration=2.0)
+    assert t.size == 20001
+    fit = fistage.identify.record(t, force, position, mass=truth["mass"], horizon=None,
+                                  closed_loop=scenario)
+    assert "closed_loop_sine" in fit.report["closed_loop"]
+    for name in ("f_c", "f_s", "v_s", "sigma0", "sigma1", "sigma2"):
+        assert fit[name]["value"] == pytest.approx(truth[name], rel=1e-3), name
+    with pytest.raises(fistage.LoadError, match="fig05a_fi.toml.*isolator"):
+        fistage.identify.record(t, force, position, closed_loop=root / "scenarios/paper/fig05a_fi.toml")
+
+
 def test_record_fit_stops_when_the_callback_raises(root, tmp_path):
     t, force, position, _ = fistage.identify.simulate_record(root / "robots/stage_1dof_rigid.urdf")
 

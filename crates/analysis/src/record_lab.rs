@@ -6,12 +6,21 @@
 //! added. The stage is the full assembled model (isolators and all), so a
 //! record made here is an independent check of the record fit's one-mass
 //! plant.
+//!
+//! [`RecordLab::measure_closed_loop`] records a scenario run instead: the
+//! scenario's own servo drives the stage along its reference (the way
+//! `fistage run` integrates it, in continuous time), the unmeasured
+//! disturbance entering as an external force the servo does not log.
 
 use fistage_ident::record::program::lab_program;
 use fistage_ident::record::{LabErrors, Record, Segment, StartState};
 use fistage_ident::{IdentError, Result};
-use fistage_model::Inputs;
+use std::path::Path;
+
+use fistage_model::{Inputs, load};
 use fistage_sim::Excitation;
+use fistage_sim::excitation::ScenarioExcitation;
+use fistage_sim::run::initial_state;
 
 use crate::lab::{LabStage, Tolerance, simulate};
 
@@ -81,17 +90,129 @@ impl RecordLab {
             ));
         }
         self.errors.measure(&mut position);
-        let record = Record {
-            source: stage.source().to_string(),
-            columns: ["t_s".into(), "f_servo_N".into(), "x_m".into()],
-            rows: (2..n as u64 + 2).collect(),
-            row_word: "line",
-            time,
-            force,
-            position,
-            start: StartState::default(),
-        };
+        let record = csv_record(stage.source().to_string(), time, force, position);
         Ok((record, segments))
+    }
+}
+
+impl RecordLab {
+    /// Records the run of the scenario at `path` with its own servo over
+    /// `duration` seconds (the scenario's when `None`): the servo's force
+    /// command and the encoder it reads, with the lab's errors on the
+    /// encoder and the disturbance acting unlogged.
+    pub fn measure_closed_loop(&self, path: &Path, duration: Option<f64>) -> Result<Record> {
+        let loaded = load(path)?;
+        let source = path.display().to_string();
+        let failed = |message: String| IdentError::Simulation {
+            file: source.clone(),
+            message,
+        };
+        let model = &loaded.model;
+        let Some(controller) = model.controller() else {
+            return Err(failed(
+                "a closed-loop record needs the scenario's servo, and it has no [controller]"
+                    .into(),
+            ));
+        };
+        let t_end = duration.unwrap_or(loaded.scenario.duration);
+        let n = (t_end / self.dt + 1e-9).floor() as usize + 1;
+        if !(self.dt > 0.0 && self.dt.is_finite()) || n < fistage_ident::record::data::MIN_SAMPLES {
+            return Err(IdentError::InvalidOption(format!(
+                "a sample interval of {} s over {t_end} s gives {n} samples; a record needs at \
+                 least {}",
+                self.dt,
+                fistage_ident::record::data::MIN_SAMPLES
+            )));
+        }
+        let time: Vec<f64> = (0..n).map(|k| k as f64 * self.dt).collect();
+        let disturbance = self.errors.disturbance(n, self.dt);
+        let excitation = DisturbedServo {
+            scenario: ScenarioExcitation::from_scenario(&loaded.scenario),
+            disturbance: HeldForce {
+                time: time.clone(),
+                force: disturbance.clone(),
+            },
+        };
+        let signal = |name: String| {
+            model
+                .signal_index(&name)
+                .ok_or_else(|| failed(format!("the model has no signal '{name}'")))
+        };
+        let sensor = signal(format!(
+            "{}.position",
+            model.sensors()[controller.sensor].name
+        ))?;
+        let drive = signal(format!(
+            "{}.force",
+            model.actuators()[controller.actuator].name
+        ))?;
+        let x0 = initial_state(model, &loaded.scenario)?;
+        let trajectory = simulate(
+            model,
+            &x0,
+            &excitation,
+            time[n - 1],
+            self.dt,
+            self.tolerance,
+        )
+        .map_err(|e| failed(format!("the closed-loop run: {e}")))?;
+        let signals = trajectory.signals(model, &excitation);
+        let column =
+            |i: usize| -> Vec<f64> { signals.columns[i].iter().take(n).copied().collect() };
+        let mut position = column(sensor);
+        // The drive's force is the servo's command plus the external force;
+        // the log holds the command only.
+        let force: Vec<f64> = (column(drive).iter().zip(&disturbance))
+            .map(|(f, d)| f - d)
+            .collect();
+        if position.len() != n || force.len() != n {
+            return Err(failed(format!(
+                "the closed-loop run gave {} samples for {n} times",
+                position.len()
+            )));
+        }
+        self.errors.measure(&mut position);
+        Ok(csv_record(source, time, force, position))
+    }
+}
+
+/// A record as `simulate-record` writes it to CSV (`t_s,f_servo_N,x_m`,
+/// data from line 2), starting at rest.
+fn csv_record(source: String, time: Vec<f64>, force: Vec<f64>, position: Vec<f64>) -> Record {
+    Record {
+        source,
+        columns: ["t_s".into(), "f_servo_N".into(), "x_m".into()],
+        rows: (2..time.len() as u64 + 2).collect(),
+        row_word: "line",
+        time,
+        force,
+        position,
+        start: StartState::default(),
+    }
+}
+
+/// A scenario's inputs with an unlogged external force held over each
+/// sample interval.
+struct DisturbedServo {
+    scenario: ScenarioExcitation,
+    disturbance: HeldForce,
+}
+
+impl Excitation for DisturbedServo {
+    fn inputs(&self, t: f64) -> Inputs {
+        Inputs {
+            servo_force: self.disturbance.inputs(t).servo_force,
+            ..self.scenario.inputs(t)
+        }
+    }
+
+    fn breakpoints(&self) -> Vec<f64> {
+        let mut out = self.scenario.breakpoints();
+        if self.disturbance.force.iter().any(|&d| d != 0.0) {
+            out.extend(self.disturbance.breakpoints());
+        }
+        out.sort_by(f64::total_cmp);
+        out
     }
 }
 

@@ -5,8 +5,10 @@
 //! ```text
 //! fistage identify record DATA [--mass M | --fit-mass] [--json] [--out DIR]
 //!                              [--segments FILE] [--loss l2|huber] [--horizon S|whole]
+//!                              [--closed-loop SCENARIO]
 //! fistage identify simulate-record ROBOT_OR_SCENARIO --out DATA.csv|DATA.mat [--seed N]
 //!                              [--exact] [--quantum M] [--noise M] [--disturbance N]
+//!                              [--closed-loop [--duration S]]
 //! ```
 
 use std::path::{Path, PathBuf};
@@ -17,7 +19,8 @@ use fistage_analysis::lab::LabStage;
 use fistage_analysis::record_lab::RecordLab;
 use fistage_ident::record::{
     FitProgress, LabErrors, MassChoice, Record, RecordFit, RecordOptions, RecordReport,
-    SegmentChoice, fit_record, read_record, read_segments, record_fit_csv, record_override,
+    SegmentChoice, ServoLoop, fit_record, read_record, read_segments, record_fit_csv,
+    record_override,
 };
 use fistage_ident::{Loss, Quantity, UnitOverrides};
 use fistage_plot::{Figure, Panel, Series, write_figure};
@@ -36,7 +39,10 @@ force `f_servo_N` (or `force_N`), position `x_nm` (or `x_um`, `x_mm`, `x_m`). \
 The force is held over each sample interval (zero-order hold: f[k] acts on [t_k, t_k+1)); \
 the position is sampled at t_k before f[k] acts; the stage starts at rest with relaxed \
 bristles unless --start-velocity / --start-bristle say otherwise; encoders are quantised \
-(1 nm is typical) and the fit expects that.";
+(1 nm is typical) and the fit expects that. \
+With --closed-loop SCENARIO the record is a run of that scenario's servo (its reference, \
+gains, compensation and observer, in continuous time): the plant's force is the servo's on \
+the simulated encoder, and the logged force gives only the first estimates.";
 
 #[derive(Clone, Copy, ValueEnum)]
 enum RecordLoss {
@@ -65,9 +71,16 @@ pub struct RecordArgs {
     loss: RecordLoss,
     /// How often the simulated position is re-anchored to the encoder, s, or
     /// `whole` for a pure output error (re-anchored only where a motion
-    /// follows a rest). 10 ms keeps an unmeasured force from bending the fit.
+    /// follows a rest). 10 ms keeps an unmeasured force from bending the fit
+    /// and a closed-loop limit cycle from drifting out of phase; `whole`
+    /// suits a smooth closed-loop run (the servo reads every re-anchored,
+    /// quantised position).
     #[arg(long, value_name = "S|whole", default_value = "0.01")]
     horizon: String,
+    /// A closed-loop record: the scenario whose servo and reference drove
+    /// the stage (its stage must be one mass on one contact).
+    #[arg(long, value_name = "SCENARIO")]
+    closed_loop: Option<PathBuf>,
     /// Relative tolerance of the plant simulation.
     #[arg(long, default_value_t = 1e-8)]
     rtol: f64,
@@ -107,6 +120,14 @@ pub struct SimulateRecordArgs {
     /// Sample rate, Hz.
     #[arg(long, value_name = "HZ", default_value_t = 10_000.0)]
     rate: f64,
+    /// Record a run of the scenario's own servo along its reference instead
+    /// of the open-loop program (the stage must be a scenario with a
+    /// [controller]); the disturbance acts unlogged.
+    #[arg(long)]
+    closed_loop: bool,
+    /// Length of a closed-loop record, s (the scenario's duration by default).
+    #[arg(long, value_name = "S", requires = "closed_loop")]
+    duration: Option<f64>,
 }
 
 /// Runs `fistage identify record`.
@@ -125,6 +146,10 @@ pub fn run_record(args: &RecordArgs) -> Result<()> {
     let segments = match &args.segments {
         Some(path) => SegmentChoice::Given(read_segments(path, &record)?),
         None => SegmentChoice::Detect,
+    };
+    let closed_loop = match &args.closed_loop {
+        Some(path) => Some(ServoLoop::from_scenario(path)?),
+        None => None,
     };
     let horizon = match args.horizon.as_str() {
         "whole" => None,
@@ -146,6 +171,7 @@ pub fn run_record(args: &RecordArgs) -> Result<()> {
         rtol: args.rtol,
         segments,
         horizon,
+        closed_loop,
         ..RecordOptions::default()
     };
     let bar = crate::progress::bar("fitting the record");
@@ -262,8 +288,31 @@ pub fn simulate_record(args: &SimulateRecordArgs) -> Result<()> {
             ..LabErrors::exact()
         }
     };
-    let (record, segments) = lab.measure(&stage)?;
+    if let Some(d) = args.duration
+        && !(d.is_finite() && d > 0.0)
+    {
+        bail!("--duration must be a positive number of s, got {d}");
+    }
+    let (record, segments) = if args.closed_loop {
+        (
+            lab.measure_closed_loop(&common.stage, args.duration)?,
+            Vec::new(),
+        )
+    } else {
+        lab.measure(&stage)?
+    };
     write_record(&common.out, &record)?;
+    if args.closed_loop {
+        println!(
+            "wrote {} samples ({:.2} s at {} Hz, closed loop) to {}",
+            record.len(),
+            record.duration(),
+            args.rate,
+            common.out.display()
+        );
+        print_truth(&stage);
+        return Ok(());
+    }
     let segments_path = common.out.with_extension("segments.csv");
     let mut table = String::from("start_s,end_s,kind\n");
     for s in segments.iter().filter(|s| !s.is_rest()) {
@@ -276,7 +325,6 @@ pub fn simulate_record(args: &SimulateRecordArgs) -> Result<()> {
     }
     std::fs::write(&segments_path, table)
         .with_context(|| format!("{}: cannot write", segments_path.display()))?;
-    let p = stage.friction();
     println!(
         "wrote {} samples ({:.2} s at {} Hz) to {} and its segments to {}",
         record.len(),
@@ -285,6 +333,13 @@ pub fn simulate_record(args: &SimulateRecordArgs) -> Result<()> {
         common.out.display(),
         segments_path.display()
     );
+    print_truth(&stage);
+    Ok(())
+}
+
+/// Prints the stage's true parameters as JSON.
+fn print_truth(stage: &LabStage) {
+    let p = stage.friction();
     let truth = serde_json::json!({
         "f_c": p.f_c, "f_s": p.f_s, "v_s": p.v_s, "sigma0": p.sigma0,
         "sigma1": p.sigma1, "sigma2": p.sigma2, "mass": stage.moving_mass(),
@@ -294,7 +349,6 @@ pub fn simulate_record(args: &SimulateRecordArgs) -> Result<()> {
         stage.friction_name(),
         stage.source()
     );
-    Ok(())
 }
 
 /// Writes a record as CSV (`t_s,f_servo_N,x_m`) or, for a `.mat` name, as a

@@ -1056,6 +1056,75 @@ fn completions_and_man_pages_cover_every_command() {
     std::fs::remove_dir_all(folder).ok();
 }
 
+/// Runs `identify simulate-record` with `args`: the true parameters it prints.
+fn simulate_record(args: &[&std::ffi::OsStr]) -> serde_json::Value {
+    let mut all: Vec<&std::ffi::OsStr> = vec!["identify".as_ref(), "simulate-record".as_ref()];
+    all.extend_from_slice(args);
+    let printed = succeeds(&all);
+    let truth_text = printed
+        .lines()
+        .find_map(|l| l.split_once("): ").map(|(_, json)| json.to_string()))
+        .expect("the truth is printed");
+    serde_json::from_str(&truth_text).expect("truth JSON")
+}
+
+/// A closed-loop record of the shipped sine-tracking scenario, made by
+/// `identify simulate-record --closed-loop` (the full assembled stage with
+/// its servo), is fitted by `identify record --closed-loop` to the stage's
+/// parameters; a stage with FI is refused, naming the scenario.
+#[test]
+fn closed_loop_records_are_fitted_inside_the_scenario_servo() {
+    let dir = scratch("record-closed-loop");
+    std::fs::create_dir_all(&dir).expect("scratch");
+    let scenario = repository().join("scenarios/identify/closed_loop_sine.toml");
+    let csv = dir.join("run.csv");
+    let truth = simulate_record(&[
+        scenario.as_os_str(),
+        "--closed-loop".as_ref(),
+        "--out".as_ref(),
+        csv.as_os_str(),
+    ]);
+    let json = succeeds(&[
+        "identify".as_ref(),
+        "record".as_ref(),
+        csv.as_os_str(),
+        "--closed-loop".as_ref(),
+        scenario.as_os_str(),
+        "--horizon".as_ref(),
+        "whole".as_ref(),
+        "--json".as_ref(),
+    ]);
+    let fit: serde_json::Value = serde_json::from_str(&json).expect("JSON");
+    assert!(
+        fit["closed_loop"]
+            .as_str()
+            .is_some_and(|s| s.contains("closed_loop_sine"))
+    );
+    for name in ["f_c", "f_s", "v_s", "sigma0", "sigma1", "sigma2", "mass"] {
+        let value = fit[name]["value"].as_f64().expect("value");
+        let exact = truth[name].as_f64().expect("truth");
+        assert!(
+            (value / exact - 1.0).abs() < 1e-3,
+            "{name} = {value}, truth {exact}"
+        );
+    }
+    let fi = repository().join("scenarios/paper/fig05a_fi.toml");
+    let output = fistage()
+        .args(["identify", "record"])
+        .arg(&csv)
+        .arg("--closed-loop")
+        .arg(&fi)
+        .output()
+        .expect("fistage runs");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success());
+    assert!(
+        stderr.contains("fig05a_fi.toml") && stderr.contains("isolator"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// `identify simulate-record` on the rigid one-bearing stage (the full
 /// assembled model) and `identify record` on its CSV and MAT-files recover
 /// the stage's six LuGre parameters and its mass: the one-mass plant of the
@@ -1067,18 +1136,7 @@ fn record_identification_recovers_the_stage_from_csv_and_mat() {
     std::fs::create_dir_all(&dir).expect("scratch");
     let robot = repository().join("robots/stage_1dof_rigid.urdf");
     let csv = dir.join("run.csv");
-    let printed = succeeds(&[
-        "identify".as_ref(),
-        "simulate-record".as_ref(),
-        robot.as_os_str(),
-        "--out".as_ref(),
-        csv.as_os_str(),
-    ]);
-    let truth_text = printed
-        .lines()
-        .find_map(|l| l.split_once("): ").map(|(_, json)| json.to_string()))
-        .expect("the truth is printed");
-    let truth: serde_json::Value = serde_json::from_str(&truth_text).expect("truth JSON");
+    let truth = simulate_record(&[robot.as_os_str(), "--out".as_ref(), csv.as_os_str()]);
     let mat = dir.join("run.mat");
     succeeds(&[
         "identify".as_ref(),

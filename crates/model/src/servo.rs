@@ -258,9 +258,11 @@ impl Controller {
     }
 
     /// The servo law at a sensor reading and rate: the actuator force and
-    /// the values of [`ServoValues`].
+    /// the values of [`ServoValues`]. `x` holds the servo's own states at
+    /// the indices the controller names (the model's state vector, or any
+    /// vector laid out by the same indices).
     #[inline(always)]
-    pub(crate) fn law<S: Scalar>(
+    pub fn law<S: Scalar>(
         &self,
         position: S,
         velocity: S,

@@ -96,6 +96,19 @@ impl Record {
         }
     }
 
+    /// The record seen from a counter-surface moving at `velocity`: the
+    /// position less `velocity (t - t_0)`, so that its rate is the slip
+    /// velocity the friction sees (the acceleration is unchanged).
+    pub fn relative_to_platform(&self, velocity: f64) -> Self {
+        let t0 = self.time.first().copied().unwrap_or(0.0);
+        let mut out = self.clone();
+        for (x, t) in out.position.iter_mut().zip(&self.time) {
+            *x -= velocity * (t - t0);
+        }
+        out.start.velocity -= velocity;
+        out
+    }
+
     /// Checks lengths, finiteness and strictly increasing times; errors name
     /// the column and the row.
     pub fn check(&self) -> Result<()> {

@@ -30,8 +30,9 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::data::Record;
-use super::plant::{Anchors, PlantTolerance, RecordParam, Simulated, Theta, simulate};
+use super::plant::{Anchors, Drive, PlantTolerance, RecordParam, Simulated, Theta, simulate};
 use super::segments::{Segment, anchors, blocks, detect_segments};
+use super::servo_loop::ServoLoop;
 use super::start::{StartEstimate, derivatives, estimate_start};
 use crate::error::{IdentError, Result};
 use crate::stribeck::Loss;
@@ -79,8 +80,16 @@ pub struct RecordOptions {
     /// parameters to follow the drift; a horizon of 10 ms cuts the bias on a
     /// disturbed record several times and changes nothing on a clean one.
     /// `None`: pure output error, re-anchored only where a motion follows a
-    /// rest.
+    /// rest. Closed loop, the horizon keeps a limit cycle (stick-slip on a
+    /// moving counter-surface) from drifting out of phase, without which
+    /// the fit does not converge; on a smooth tracking run `None` is better,
+    /// since the servo reads every re-anchored, quantised position (sigma1
+    /// off by 3e-4 on a clean 1 nm sine-tracking record, against 2e-6).
     pub horizon: Option<f64>,
+    /// The scenario servo of a closed-loop record: the plant's force is
+    /// then the servo's on the simulated encoder, not the recorded one
+    /// (which gives only the first estimates).
+    pub closed_loop: Option<ServoLoop>,
 }
 
 impl Default for RecordOptions {
@@ -93,6 +102,7 @@ impl Default for RecordOptions {
             start: None,
             segments: SegmentChoice::Detect,
             horizon: Some(10e-3),
+            closed_loop: None,
         }
     }
 }
@@ -124,6 +134,8 @@ pub struct RecordFit {
     pub start: StartEstimate,
     /// The parameters the iterations started from (the best presliding variant).
     pub refined_start: Theta,
+    /// Per parameter, the box (low, high) the fit kept it in.
+    pub bounds: [(f64, f64); 7],
     /// Position residual statistics, m.
     pub residuals: ResidualStats,
     /// The simulated position at every sample, m.
@@ -142,6 +154,8 @@ pub struct RecordFit {
     pub rhs_evaluations: u64,
     /// The loss.
     pub loss: Loss,
+    /// The scenario whose servo closed the loop (closed-loop records).
+    pub closed_loop: Option<String>,
 }
 
 impl RecordFit {
@@ -196,13 +210,23 @@ pub fn fit_record(
         }
         MassChoice::Fit => None,
     };
-    let start = estimate_start(record, known_mass)?;
+    // The first estimates read friction against slip: on a moving
+    // counter-surface, from the record seen from it.
+    let start = match &options.closed_loop {
+        Some(servo) if servo.platform_velocity != 0.0 => estimate_start(
+            &record.relative_to_platform(servo.platform_velocity),
+            known_mass,
+        )?,
+        _ => estimate_start(record, known_mass)?,
+    };
     let free: Vec<RecordParam> = RecordParam::ALL
         .iter()
         .copied()
         .filter(|p| *p != RecordParam::Mass || known_mass.is_none())
         .collect();
     let segments = match &options.segments {
+        // A servo holds the stage where a rest of zero force would be.
+        SegmentChoice::Detect if options.closed_loop.is_some() => Vec::new(),
         SegmentChoice::Detect => detect_segments(record),
         SegmentChoice::Given(s) => s.clone(),
         SegmentChoice::Whole => Vec::new(),
@@ -217,6 +241,10 @@ pub fn fit_record(
     first.0[fs] = first.0[fs].max(1.05 * first.0[fc]);
     let problem = Problem {
         record,
+        drive: options
+            .closed_loop
+            .as_ref()
+            .map_or(Drive::Recorded, Drive::Servo),
         free: &free,
         anchors: Anchors {
             samples: &anchors,
@@ -225,6 +253,7 @@ pub fn fit_record(
         loss: options.loss,
         rtol: options.rtol,
         center: first,
+        spread: spread(&start.ruled, options.start.is_some()),
     };
     if !progress(&FitProgress {
         iteration: 0,
@@ -281,6 +310,10 @@ pub fn fit_record(
         None => residual_blocks(&segments, record.len()),
     };
     let (estimates, iid) = problem.intervals(&outcome, &block_ranges, known_mass);
+    let bounds = std::array::from_fn(|i| {
+        let (center, spread) = (problem.center.0[i], problem.spread[i]);
+        (center / spread, center * spread)
+    });
     let residuals: Vec<f64> = outcome.misfit.residual.clone();
     let stats = ResidualStats::new(&residuals, &record.position, &record.rows, free.len());
     Ok(RecordFit {
@@ -290,6 +323,7 @@ pub fn fit_record(
         iid_std_errors: iid,
         start,
         refined_start,
+        bounds,
         residuals: stats,
         simulated: outcome.misfit.sim.position,
         segments,
@@ -298,7 +332,20 @@ pub fn fit_record(
         converged: outcome.converged,
         rhs_evaluations: outcome.rhs_evaluations,
         loss: options.loss,
+        closed_loop: options.closed_loop.as_ref().map(|s| s.source.clone()),
     })
+}
+
+/// The box of every parameter around its start: [`RULED_BOX`] for the
+/// `ruled` ones unless the start was given.
+fn spread(ruled: &[RecordParam], given: bool) -> [f64; 7] {
+    let mut out = [BOX; 7];
+    if !given {
+        for p in ruled {
+            out[p.index()] = RULED_BOX;
+        }
+    }
+    out
 }
 
 /// `anchors` and a sample every `interval` seconds, sorted.
@@ -350,12 +397,16 @@ struct Outcome {
 #[derive(Clone, Copy)]
 struct Problem<'a> {
     record: &'a Record,
+    drive: Drive<'a>,
     free: &'a [RecordParam],
     anchors: Anchors<'a>,
     loss: Loss,
     rtol: f64,
-    /// The start: every parameter stays within a factor [`BOX`] of it.
+    /// The start: every parameter stays within a factor `spread` of it.
     center: Theta,
+    /// Per parameter, how far from the start it may go: [`BOX`], or
+    /// [`RULED_BOX`] for one the record gave no estimate of.
+    spread: [f64; 7],
 }
 
 /// How far from the start a parameter may go: a factor of 100 either way
@@ -364,11 +415,17 @@ struct Problem<'a> {
 /// v_s -> 0, and a fit that ends on it says so).
 const BOX: f64 = 100.0;
 
+/// How far from its start a parameter set by a rule (no estimate from the
+/// record: sigma2 without steady sliding, sigma0 and sigma1 without
+/// presliding) may go: a rule is no centre to stay near.
+const RULED_BOX: f64 = 1e6;
+
 impl Problem<'_> {
     fn misfit(&self, theta: &Theta, sensitivities: bool, threshold: f64) -> Result<Misfit> {
         let tolerance = PlantTolerance::for_theta(theta, self.rtol);
         let sim = simulate(
             self.record,
+            self.drive,
             theta,
             self.free,
             sensitivities,
@@ -501,8 +558,8 @@ impl Problem<'_> {
         let mut out = *theta;
         for (j, param) in self.free.iter().enumerate() {
             let i = param.index();
-            let center = self.center.0[i];
-            out.0[i] = (out.0[i] * step[j].exp()).clamp(center / BOX, center * BOX);
+            let (center, spread) = (self.center.0[i], self.spread[i]);
+            out.0[i] = (out.0[i] * step[j].exp()).clamp(center / spread, center * spread);
         }
         let (fc, fs) = (RecordParam::FC.index(), RecordParam::FS.index());
         out.0[fs] = out.0[fs].max(out.0[fc]);

@@ -9,7 +9,8 @@
 //! * [`read`]: CSV and MAT-files, columns or variables by unit suffix
 //!   (`t_s`, `f_servo_N`, `x_nm`);
 //! * [`plant`]: paper Eq. 31 through fistage's engine, with exact forward
-//!   sensitivities;
+//!   sensitivities, driven by the recorded force or, for a closed-loop
+//!   record, by a scenario's servo ([`servo_loop`]);
 //! * [`segments`]: rests, chirps, ramps, holds and steps, from a table or
 //!   found from the force;
 //! * [`start`]: first estimates from the record itself;
@@ -34,6 +35,7 @@ pub mod program;
 pub mod read;
 pub mod report;
 pub mod segments;
+pub mod servo_loop;
 pub mod start;
 pub mod synth;
 
@@ -43,4 +45,5 @@ pub use plant::{RecordParam, Theta};
 pub use read::{parse_record_mat, read_record};
 pub use report::{RecordReport, record_fit_csv, record_override};
 pub use segments::{Segment, detect_segments, read_segments};
+pub use servo_loop::ServoLoop;
 pub use synth::{LabErrors, RecordSynth};

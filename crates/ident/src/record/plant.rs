@@ -20,6 +20,7 @@ use nalgebra::SVector;
 use num_dual::Derivative;
 
 use super::data::Record;
+use super::servo_loop::{MAX_SERVO_STATES, PLANT_STATES, ServoLoop};
 use crate::error::{IdentError, Result};
 
 /// A parameter a record fit can estimate.
@@ -125,9 +126,10 @@ impl Theta {
     }
 }
 
-/// The rates `(x', v', z')` of Eq. 31 for any scalar.
+/// The rates `(x', v', z')` of Eq. 31 for any scalar, the contact sliding
+/// at `v - platform_velocity`.
 #[inline]
-fn rates<S: Scalar>(theta: &[S; 7], force: f64, v: S, z: S) -> [S; 3] {
+fn rates<S: Scalar>(theta: &[S; 7], force: S, v: S, z: S, platform_velocity: f64) -> [S; 3] {
     let [f_c, f_s, v_s, sigma0, sigma1, sigma2, mass] = *theta;
     let law = LugreOf {
         sigma0,
@@ -137,36 +139,85 @@ fn rates<S: Scalar>(theta: &[S; 7], force: f64, v: S, z: S) -> [S; 3] {
         f_s,
         v_s,
     };
-    let (friction, z_dot) = law.force_and_z_rate(v, z);
-    [v, (S::constant(force) - friction) / mass, z_dot]
+    let slip = if platform_velocity == 0.0 {
+        v
+    } else {
+        v - S::constant(platform_velocity)
+    };
+    let (friction, z_dot) = law.force_and_z_rate(slip, z);
+    [v, (force - friction) / mass, z_dot]
 }
 
-/// Eq. 31 with the sensitivities of `free` as an [`OdeSystem`].
+/// What drives the plant.
+#[derive(Debug, Clone, Copy)]
+pub enum Drive<'a> {
+    /// The recorded force, held over each sample interval (open loop).
+    Recorded,
+    /// A scenario's servo on the simulated encoder (closed loop).
+    Servo(&'a ServoLoop),
+}
+
+impl Drive<'_> {
+    /// Number of states before sensitivities: the plant's and the servo's.
+    fn base(&self) -> usize {
+        PLANT_STATES + self.servo().map_or(0, ServoLoop::n_states)
+    }
+
+    fn servo(&self) -> Option<&ServoLoop> {
+        match self {
+            Drive::Recorded => None,
+            Drive::Servo(s) => Some(s),
+        }
+    }
+}
+
+/// Eq. 31 (with its servo) and the sensitivities of `free` as an [`OdeSystem`].
 struct SensitivitySystem<'a> {
     theta: [f64; 7],
     free: &'a [RecordParam],
+    /// The held force of the current sample interval (open loop).
     force: f64,
+    servo: Option<&'a ServoLoop>,
+    /// States before sensitivities.
+    base: usize,
 }
+
+impl SensitivitySystem<'_> {
+    /// The rates of the plant and servo states `y` (`base` entries).
+    #[inline]
+    fn evaluate<S: Scalar>(&self, t: f64, theta: &[S; 7], y: &[S], dy: &mut [S]) {
+        match self.servo {
+            None => {
+                let r = rates(theta, S::constant(self.force), y[1], y[2], 0.0);
+                dy[..PLANT_STATES].copy_from_slice(&r);
+            }
+            Some(servo) => {
+                let (force, values) = servo.force(t, y);
+                let r = rates(theta, force, y[1], y[2], servo.platform_velocity);
+                dy[..PLANT_STATES].copy_from_slice(&r);
+                servo.write_rates(&values, dy);
+            }
+        }
+    }
+}
+
+/// The most states before sensitivities.
+const MAX_BASE: usize = PLANT_STATES + MAX_SERVO_STATES;
 
 impl OdeSystem for SensitivitySystem<'_> {
     fn dim(&self) -> usize {
-        3 * (1 + self.free.len())
+        self.base * (1 + self.free.len())
     }
 
-    fn rhs(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) {
-        let primal = rates(&self.theta, self.force, y[1], y[2]);
-        dy[..3].copy_from_slice(&primal);
+    fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) {
+        let nb = self.base;
+        self.evaluate(t, &self.theta, &y[..nb], &mut dy[..nb]);
         if self.free.is_empty() {
             return;
         }
         // One pass with a lane per free parameter: lane j carries
         // d / d ln(theta_j) (the parameter moves along itself, the state
         // along its sensitivity).
-        let lanes = |f: &dyn Fn(usize) -> f64| {
-            Derivative::some(SVector::<f64, LANES>::from_fn(|j, _| {
-                if j < self.free.len() { f(j) } else { 0.0 }
-            }))
-        };
         let mut theta = self.theta.map(Lanes::from_re);
         for (j, param) in self.free.iter().enumerate() {
             let i = param.index();
@@ -174,13 +225,23 @@ impl OdeSystem for SensitivitySystem<'_> {
             eps[j] = self.theta[i];
             theta[i].eps = Derivative::some(eps);
         }
-        let v = Lanes::new(y[1], lanes(&|j| y[4 + 3 * j]));
-        let z = Lanes::new(y[2], lanes(&|j| y[5 + 3 * j]));
-        let r = rates(&theta, self.force, v, z);
-        for (c, value) in r.iter().enumerate() {
+        let mut state = [Lanes::from_re(0.0); MAX_BASE];
+        for (c, entry) in state.iter_mut().enumerate().take(nb) {
+            let lanes = SVector::<f64, LANES>::from_fn(|j, _| {
+                if j < self.free.len() {
+                    y[nb * (1 + j) + c]
+                } else {
+                    0.0
+                }
+            });
+            *entry = Lanes::new(y[c], Derivative::some(lanes));
+        }
+        let mut rate = [Lanes::from_re(0.0); MAX_BASE];
+        self.evaluate(t, &theta, &state[..nb], &mut rate[..nb]);
+        for (c, value) in rate.iter().enumerate().take(nb) {
             let eps = value.eps.0.unwrap_or_else(SVector::zeros);
             for j in 0..self.free.len() {
-                dy[3 + 3 * j + c] = eps[j];
+                dy[nb * (1 + j) + c] = eps[j];
             }
         }
     }
@@ -240,15 +301,16 @@ pub struct Simulated {
     pub rhs_evaluations: u64,
 }
 
-/// Simulates `record`'s force through the plant with parameters `theta`,
-/// from the record's start state at its first position; with the
-/// sensitivities of `free` when `sensitivities` is set. At each sample of
-/// `anchors.samples` the simulated position is set to the measured one (a
-/// segment start; velocity and bristle carry on), so drift does not
-/// accumulate from one segment into the next; and the velocity too when
-/// `anchors.velocity` gives one.
+/// Simulates the plant with parameters `theta` through `record`, driven by
+/// its force (open loop) or by a servo (closed loop), from the record's
+/// start state at its first position; with the sensitivities of `free` when
+/// `sensitivities` is set. At each sample of `anchors.samples` the
+/// simulated position is set to the measured one (a segment start; velocity
+/// and bristle carry on), so drift does not accumulate from one segment into
+/// the next; and the velocity too when `anchors.velocity` gives one.
 pub fn simulate(
     record: &Record,
+    drive: Drive<'_>,
     theta: &Theta,
     free: &[RecordParam],
     sensitivities: bool,
@@ -256,24 +318,29 @@ pub fn simulate(
     tolerance: PlantTolerance,
 ) -> Result<Simulated> {
     let free_used: &[RecordParam] = if sensitivities { free } else { &[] };
+    let nb = drive.base();
     let mut system = SensitivitySystem {
         theta: theta.0,
         free: free_used,
         force: record.force[0],
+        servo: drive.servo(),
+        base: nb,
     };
     let dim = system.dim();
     let mut y0 = vec![0.0; dim];
     y0[0] = record.position[0];
     y0[1] = record.start.velocity;
     y0[2] = record.start.bristle;
-    let mut atol = vec![0.0; dim];
-    for block in atol.chunks_mut(3) {
-        block.copy_from_slice(&[
-            tolerance.atol_position,
-            tolerance.atol_velocity,
-            tolerance.atol_position,
-        ]);
+    let mut atol_base = vec![
+        tolerance.atol_position,
+        tolerance.atol_velocity,
+        tolerance.atol_position,
+    ];
+    if let Some(servo) = drive.servo() {
+        y0[PLANT_STATES..nb].copy_from_slice(servo.initial());
+        atol_base.extend(servo.nominal().iter().map(|n| tolerance.rtol * n));
     }
+    let atol: Vec<f64> = atol_base.iter().copied().cycle().take(dim).collect();
     let dt = record.sample_interval();
     let tol = Tolerances {
         rtol: tolerance.rtol,
@@ -289,30 +356,29 @@ pub fn simulate(
         jacobian: Vec::with_capacity(n * p),
         rhs_evaluations: 0,
     };
+    let t_end = record.time[n - 1];
+    let breakpoints = drive
+        .servo()
+        .map_or_else(Vec::new, |s| s.breakpoints(record.time[0], t_end));
+    let mut next_breakpoint = breakpoints.iter().copied().peekable();
     let mut integrator = DormandPrince::new(&mut system, record.time[0], &y0, tol);
     let mut next_anchor = anchors.samples.iter().copied().peekable();
     for k in 0..n {
         if k > 0 {
             let t_stop = record.time[k];
             while integrator.t < t_stop {
+                let target = next_breakpoint
+                    .peek()
+                    .copied()
+                    .filter(|&b| b <= t_stop)
+                    .unwrap_or(t_stop);
                 integrator
-                    .step(&mut system, t_stop)
-                    .map_err(|failure| IdentError::Simulation {
-                        file: record.source.clone(),
-                        message: format!(
-                            "the plant simulation failed near t = {:.6} s ({failure:?}) with \
-                             f_c = {:.4e}, f_s = {:.4e}, v_s = {:.4e}, sigma0 = {:.4e}, \
-                             sigma1 = {:.4e}, sigma2 = {:.4e}, mass = {:.4e}",
-                            integrator.t,
-                            theta.0[0],
-                            theta.0[1],
-                            theta.0[2],
-                            theta.0[3],
-                            theta.0[4],
-                            theta.0[5],
-                            theta.0[6]
-                        ),
-                    })?;
+                    .step(&mut system, target)
+                    .map_err(|failure| simulation_failed(record, theta, integrator.t, failure))?;
+                if integrator.t >= target && next_breakpoint.peek() == Some(&target) {
+                    next_breakpoint.next();
+                    integrator.restart(&mut system);
+                }
             }
         }
         while next_anchor.peek().is_some_and(|&a| a < k) {
@@ -322,8 +388,10 @@ pub fn simulate(
         if next_anchor.peek() == Some(&k) && k > 0 {
             integrator.x[0] = record.position[k];
             for j in 0..p {
-                integrator.x[3 + 3 * j] = 0.0;
+                integrator.x[nb * (1 + j)] = 0.0;
             }
+            // The servo reads the position; the open-loop rates do not.
+            state_moved = system.servo.is_some();
             if let Some(v) = anchors
                 .velocity
                 .and_then(|v| v.get(k))
@@ -331,7 +399,7 @@ pub fn simulate(
             {
                 integrator.x[1] = *v;
                 for j in 0..p {
-                    integrator.x[4 + 3 * j] = 0.0;
+                    integrator.x[nb * (1 + j) + 1] = 0.0;
                 }
                 state_moved = true;
             }
@@ -339,18 +407,38 @@ pub fn simulate(
         out.position.push(integrator.x[0]);
         out.velocity.push(integrator.x[1]);
         for j in 0..p {
-            out.jacobian.push(integrator.x[3 + 3 * j]);
+            out.jacobian.push(integrator.x[nb * (1 + j)]);
         }
         // The last stage of the step is the first of the next unless the
-        // force or the velocity changed here (the position does not enter
-        // the rates).
-        if k + 1 < n && (state_moved || record.force[k] != system.force) {
+        // force or the state changed here.
+        let force_changed = system.servo.is_none() && record.force[k] != system.force;
+        if k + 1 < n && (state_moved || force_changed) {
             system.force = record.force[k];
             integrator.restart(&mut system);
         }
     }
     out.rhs_evaluations = integrator.counts.rhs_evaluations;
     Ok(out)
+}
+
+/// The error of a failed plant simulation, with the parameters it ran with.
+fn simulation_failed(
+    record: &Record,
+    theta: &Theta,
+    t: f64,
+    failure: impl std::fmt::Debug,
+) -> IdentError {
+    let names = RecordParam::ALL.iter().zip(theta.0);
+    let values: Vec<String> = names
+        .map(|(p, v)| format!("{} = {v:.4e}", p.name()))
+        .collect();
+    IdentError::Simulation {
+        file: record.source.clone(),
+        message: format!(
+            "the plant simulation failed near t = {t:.6} s ({failure:?}) with {}",
+            values.join(", ")
+        ),
+    }
 }
 
 #[cfg(test)]
@@ -376,6 +464,7 @@ mod tests {
         let tol = PlantTolerance::for_theta(&theta, 1e-11);
         let sim = simulate(
             &rec,
+            Drive::Recorded,
             &theta,
             &RecordParam::ALL,
             true,
@@ -387,7 +476,16 @@ mod tests {
             let shifted = |factor: f64| {
                 let mut th = theta;
                 th.0[param.index()] *= factor;
-                simulate(&rec, &th, &[], false, &Anchors::default(), tol).expect("runs")
+                simulate(
+                    &rec,
+                    Drive::Recorded,
+                    &th,
+                    &[],
+                    false,
+                    &Anchors::default(),
+                    tol,
+                )
+                .expect("runs")
             };
             let h: f64 = 1e-4;
             let (up, down) = (shifted(h.exp()), shifted((-h).exp()));

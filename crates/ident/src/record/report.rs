@@ -24,6 +24,9 @@ pub struct RecordReport {
     pub source: String,
     /// The model: paper Eq. 31.
     pub model: String,
+    /// The scenario whose servo drove the plant (a closed-loop record).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub closed_loop: Option<String>,
     /// `l2` or `huber`.
     pub loss: Loss,
     /// Coulomb friction.
@@ -83,8 +86,8 @@ impl RecordReport {
             .collect();
         let mut not_identifiable = undetermined(&checked);
         for (p, value) in RecordParam::ALL.iter().map(|&p| (p, fit.theta.get(p))) {
-            let center = fit.refined_start.get(p);
-            let on_box = value <= center / 99.0 || value >= center * 99.0;
+            let (low, high) = fit.bounds[p.index()];
+            let on_box = value <= 1.01 * low || value >= high / 1.01;
             if fit.free.contains(&p)
                 && on_box
                 && !not_identifiable.iter().any(|n| n.parameter == p.name())
@@ -92,9 +95,10 @@ impl RecordReport {
                 not_identifiable.push(NotIdentifiable {
                     parameter: p.name().into(),
                     reason: format!(
-                        "the fit ran to a factor 100 from its start {}: the record does not \
-                         hold it",
-                        sig(center)
+                        "the fit ran to the edge of its box [{}, {}] around its start: the \
+                         record does not hold it",
+                        sig(low),
+                        sig(high)
                     ),
                 });
             }
@@ -120,7 +124,15 @@ impl RecordReport {
         Self {
             kind: "record".into(),
             source: record.source.clone(),
-            model: "paper Eq. 31: M x'' = -(sigma0 z + sigma1 z' + sigma2 x') + f, LuGre z".into(),
+            model: match &fit.closed_loop {
+                None => "paper Eq. 31: M x'' = -(sigma0 z + sigma1 z' + sigma2 x') + f, LuGre z",
+                Some(_) => {
+                    "paper Eq. 31: M x'' = -(sigma0 z + sigma1 z' + sigma2 x') + f, LuGre z, f \
+                     the scenario's servo on the simulated encoder (closed loop)"
+                }
+            }
+            .into(),
+            closed_loop: fit.closed_loop.clone(),
             loss: fit.loss,
             f_c: take("f_c", &mut reports),
             f_s: take("f_s", &mut reports),

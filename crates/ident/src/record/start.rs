@@ -19,7 +19,7 @@ use fistage_model::LugreParams;
 use nalgebra::{DMatrix, DVector};
 
 use super::data::Record;
-use super::plant::Theta;
+use super::plant::{RecordParam, Theta};
 use crate::error::{IdentError, Result};
 use crate::lm::brent_minimize;
 
@@ -35,6 +35,9 @@ pub struct StartEstimate {
     /// What could not be estimated from the record and was set by a rule
     /// instead, for the report.
     pub notes: Vec<String>,
+    /// The parameters set by a rule (a floor, a default ratio) rather than
+    /// estimated: the fit does not hold them near their start.
+    pub ruled: Vec<RecordParam>,
 }
 
 /// Derivatives of the encoder signal.
@@ -134,6 +137,7 @@ pub fn estimate_start(record: &Record, mass: Option<f64>) -> Result<StartEstimat
     let coarse = curve_at(&d, &thin(&fast), 1e-300, mass).1;
     let min_stretch = (20e-3 / dt) as usize;
     let mut notes = Vec::new();
+    let mut ruled = Vec::new();
     let presliding = presliding_samples(&d, coarse.f_c, coarse.mass, min_stretch);
     let presliding_fit = fit_presliding(record, &d, &presliding, coarse.mass);
     let travel = displacement_since_reversal(&d, &record.position);
@@ -157,6 +161,7 @@ pub fn estimate_start(record: &Record, mass: Option<f64>) -> Result<StartEstimat
                  sigma0 = f_c / 2 um and a damping ratio of 0.1"
                     .to_string(),
             );
+            ruled.push(RecordParam::Sigma0);
             (stribeck.f_c / 2e-6, f64::NAN)
         }
     };
@@ -170,12 +175,17 @@ pub fn estimate_start(record: &Record, mass: Option<f64>) -> Result<StartEstimat
                  started from a damping ratio of 0.1"
             ));
         }
+        ruled.push(RecordParam::Sigma1);
         0.1 * critical
     };
+    let sigma2_floor = 1e-6 * critical;
+    if stribeck.sigma2 <= sigma2_floor {
+        ruled.push(RecordParam::Sigma2);
+    }
     let lugre = LugreParams {
         sigma0,
         sigma1,
-        sigma2: stribeck.sigma2.max(1e-6 * critical),
+        sigma2: stribeck.sigma2.max(sigma2_floor),
         f_c: stribeck.f_c,
         f_s: stribeck.f_s,
         v_s: stribeck.v_s,
@@ -185,6 +195,7 @@ pub fn estimate_start(record: &Record, mass: Option<f64>) -> Result<StartEstimat
         sliding_samples: sliding.len(),
         presliding_samples: presliding.len(),
         notes,
+        ruled,
     })
 }
 

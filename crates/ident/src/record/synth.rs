@@ -8,7 +8,7 @@
 use fistage_model::LugreParams;
 
 use super::data::{Record, StartState};
-use super::plant::{Anchors, PlantTolerance, Theta, simulate};
+use super::plant::{Anchors, Drive, PlantTolerance, Theta, simulate};
 use super::program::lab_program;
 use super::segments::Segment;
 use crate::error::Result;
@@ -123,8 +123,16 @@ impl RecordSynth {
         };
         let theta = Theta::new(&self.lugre, self.mass);
         let tolerance = PlantTolerance::for_theta(&theta, 1e-11);
-        let mut position =
-            simulate(&driven, &theta, &[], false, &Anchors::default(), tolerance)?.position;
+        let mut position = simulate(
+            &driven,
+            Drive::Recorded,
+            &theta,
+            &[],
+            false,
+            &Anchors::default(),
+            tolerance,
+        )?
+        .position;
         self.errors.measure(&mut position);
         Ok((
             Record {
