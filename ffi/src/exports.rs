@@ -1,4 +1,5 @@
-//! The 34 FMI 2.0 Co-Simulation functions, as `extern "C"` symbols. Each is a
+//! The 44 FMI 2.0 functions (common, Model Exchange and Co-Simulation), as
+//! `extern "C"` symbols. Each is a
 //! thin face over [`Instance`]: it checks the instance pointer against the set
 //! of live instances, checks the array pointers, runs the call inside
 //! `catch_unwind` (a panic becomes fmi2Fatal and a log message, never an
@@ -12,14 +13,14 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::PathBuf;
 use std::sync::{Mutex, MutexGuard};
 
-use crate::instance::{CallError, Instance};
+use crate::instance::{CallError, Instance, Interface};
 use crate::logger::{LOG_CATEGORIES, Logger};
 use crate::phase::Phase;
 use crate::state::Snapshot;
 use crate::types::{
-    CO_SIMULATION, Status, fmi2Boolean, fmi2Byte, fmi2CallbackFunctions, fmi2Component,
-    fmi2FMUstate, fmi2Integer, fmi2Real, fmi2Status, fmi2StatusKind, fmi2String, fmi2Type,
-    fmi2ValueReference, status_kind,
+    CO_SIMULATION, MODEL_EXCHANGE, Status, fmi2Boolean, fmi2Byte, fmi2CallbackFunctions,
+    fmi2Component, fmi2EventInfo, fmi2FMUstate, fmi2Integer, fmi2Real, fmi2Status, fmi2StatusKind,
+    fmi2String, fmi2Type, fmi2ValueReference, status_kind,
 };
 
 /// An instance with its logger and the FMU states it handed out.
@@ -265,11 +266,16 @@ fn instantiate(
         logger.error(Status::Error, &format!("fmi2Instantiate: {message}"));
         std::ptr::null_mut()
     };
-    if fmu_type != CO_SIMULATION {
-        return fail(format!(
-            "fmuType {fmu_type} requested; this unit is Co-Simulation only (fmi2CoSimulation = 1)"
-        ));
-    }
+    let interface = match fmu_type {
+        MODEL_EXCHANGE => Interface::ModelExchange,
+        CO_SIMULATION => Interface::CoSimulation,
+        other => {
+            return fail(format!(
+                "fmuType {other} requested; this unit offers fmi2ModelExchange (0) and \
+                 fmi2CoSimulation (1)"
+            ));
+        }
+    };
     let Some(guid) = guid else {
         return fail("fmuGUID is a null pointer".into());
     };
@@ -280,7 +286,7 @@ fn instantiate(
         Ok(folder) => folder,
         Err(message) => return fail(message),
     };
-    let instance = match Instance::new(&folder, Some(&guid)) {
+    let instance = match Instance::for_interface(&folder, Some(&guid), interface) {
         Ok(instance) => instance,
         Err(error) => return fail(error.to_string()),
     };
@@ -948,4 +954,204 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
 ) -> fmi2Status {
     // SAFETY: by the caller's guarantee.
     unsafe { status_getter(c, "fmi2GetStringStatus", value, |_| None) }
+}
+
+/// fmi2EnterEventMode (Model Exchange).
+#[unsafe(no_mangle)]
+pub extern "C" fn fmi2EnterEventMode(c: fmi2Component) -> fmi2Status {
+    with_slot(c, "fmi2EnterEventMode", |slot| {
+        slot.instance.enter_event_mode()?;
+        Ok(Status::Ok)
+    })
+}
+
+/// fmi2NewDiscreteStates (Model Exchange): nothing discrete changes; the
+/// next time event is the reference's next breakpoint.
+///
+/// # Safety
+/// `fmi2eventInfo` is null or valid for writes.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2NewDiscreteStates(
+    c: fmi2Component,
+    fmi2eventInfo: *mut fmi2EventInfo,
+) -> fmi2Status {
+    with_slot(c, "fmi2NewDiscreteStates", |slot| {
+        if fmi2eventInfo.is_null() {
+            return Err(CallError::InvalidArgument(
+                "fmi2eventInfo is a null pointer".into(),
+            ));
+        }
+        let info = slot.instance.new_discrete_states()?;
+        // SAFETY: non-null; the caller passes a valid pointer.
+        unsafe {
+            *fmi2eventInfo = fmi2EventInfo {
+                newDiscreteStatesNeeded: 0,
+                terminateSimulation: 0,
+                nominalsOfContinuousStatesChanged: 0,
+                valuesOfContinuousStatesChanged: 0,
+                nextEventTimeDefined: fmi2Boolean::from(info.next_event_time.is_some()),
+                nextEventTime: info.next_event_time.unwrap_or(0.0),
+            };
+        }
+        Ok(Status::Ok)
+    })
+}
+
+/// fmi2EnterContinuousTimeMode (Model Exchange).
+#[unsafe(no_mangle)]
+pub extern "C" fn fmi2EnterContinuousTimeMode(c: fmi2Component) -> fmi2Status {
+    with_slot(c, "fmi2EnterContinuousTimeMode", |slot| {
+        slot.instance.enter_continuous_time_mode()?;
+        Ok(Status::Ok)
+    })
+}
+
+/// fmi2CompletedIntegratorStep (Model Exchange): never asks for an event
+/// or the end.
+///
+/// # Safety
+/// The flags are null or valid for writes.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
+    c: fmi2Component,
+    _noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
+    enterEventMode: *mut fmi2Boolean,
+    terminateSimulation: *mut fmi2Boolean,
+) -> fmi2Status {
+    with_slot(c, "fmi2CompletedIntegratorStep", |slot| {
+        if enterEventMode.is_null() || terminateSimulation.is_null() {
+            return Err(CallError::InvalidArgument(
+                "enterEventMode or terminateSimulation is a null pointer".into(),
+            ));
+        }
+        slot.instance.completed_integrator_step()?;
+        // SAFETY: non-null; the caller passes valid pointers.
+        unsafe {
+            *enterEventMode = 0;
+            *terminateSimulation = 0;
+        }
+        Ok(Status::Ok)
+    })
+}
+
+/// fmi2SetTime (Model Exchange).
+#[unsafe(no_mangle)]
+pub extern "C" fn fmi2SetTime(c: fmi2Component, time: fmi2Real) -> fmi2Status {
+    with_slot(c, "fmi2SetTime", |slot| {
+        slot.instance.set_time(time)?;
+        Ok(Status::Ok)
+    })
+}
+
+/// fmi2SetContinuousStates (Model Exchange).
+///
+/// # Safety
+/// `x` is null or points to `nx` elements.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetContinuousStates(
+    c: fmi2Component,
+    x: *const fmi2Real,
+    nx: usize,
+) -> fmi2Status {
+    with_slot(c, "fmi2SetContinuousStates", |slot| {
+        // SAFETY: by the caller's guarantee.
+        let x = unsafe { input_slice(x, nx, "x") }?;
+        slot.instance.set_continuous_states(x)?;
+        Ok(Status::Ok)
+    })
+}
+
+/// A Model Exchange getter filling an array of `n` reals.
+///
+/// # Safety
+/// `values` is null or points to `n` writable elements.
+unsafe fn real_array_getter(
+    c: fmi2Component,
+    call: &'static str,
+    values: *mut fmi2Real,
+    n: usize,
+    get: impl FnOnce(&mut Instance, &mut [f64]) -> Result<(), CallError>,
+) -> fmi2Status {
+    with_slot(c, call, |slot| {
+        // SAFETY: by the caller's guarantee.
+        let values = unsafe { output_slice(values, n, "the array") }?;
+        get(&mut slot.instance, values)?;
+        Ok(Status::Ok)
+    })
+}
+
+/// fmi2GetDerivatives (Model Exchange): the model's own right-hand side.
+///
+/// # Safety
+/// `derivatives` is null or points to `nx` writable elements.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetDerivatives(
+    c: fmi2Component,
+    derivatives: *mut fmi2Real,
+    nx: usize,
+) -> fmi2Status {
+    // SAFETY: by the caller's guarantee.
+    unsafe {
+        real_array_getter(c, "fmi2GetDerivatives", derivatives, nx, |i, v| {
+            i.get_derivatives(v)
+        })
+    }
+}
+
+/// fmi2GetEventIndicators (Model Exchange): the unit has none.
+///
+/// # Safety
+/// `eventIndicators` is null or points to `ni` writable elements.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetEventIndicators(
+    c: fmi2Component,
+    eventIndicators: *mut fmi2Real,
+    ni: usize,
+) -> fmi2Status {
+    // SAFETY: by the caller's guarantee.
+    unsafe {
+        real_array_getter(c, "fmi2GetEventIndicators", eventIndicators, ni, |i, v| {
+            i.get_event_indicators(v.len())
+        })
+    }
+}
+
+/// fmi2GetContinuousStates (Model Exchange).
+///
+/// # Safety
+/// `x` is null or points to `nx` writable elements.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetContinuousStates(
+    c: fmi2Component,
+    x: *mut fmi2Real,
+    nx: usize,
+) -> fmi2Status {
+    // SAFETY: by the caller's guarantee.
+    unsafe {
+        real_array_getter(c, "fmi2GetContinuousStates", x, nx, |i, v| {
+            i.get_continuous_states(v)
+        })
+    }
+}
+
+/// fmi2GetNominalsOfContinuousStates (Model Exchange).
+///
+/// # Safety
+/// `x_nominal` is null or points to `nx` writable elements.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(
+    c: fmi2Component,
+    x_nominal: *mut fmi2Real,
+    nx: usize,
+) -> fmi2Status {
+    // SAFETY: by the caller's guarantee.
+    unsafe {
+        real_array_getter(
+            c,
+            "fmi2GetNominalsOfContinuousStates",
+            x_nominal,
+            nx,
+            |i, v| i.get_nominals(v),
+        )
+    }
 }

@@ -1,8 +1,11 @@
-//! One co-simulation instance in safe Rust: the FMI 2.0 Co-Simulation state
-//! machine, parameter and input values by value reference, stepping with the
-//! native engine between communication points, FMU state snapshots and their
-//! byte form, and directional derivatives of the outputs. The C ABI in
-//! [`crate::exports`] is a thin face over this type.
+//! One instance in safe Rust: the FMI 2.0 Co-Simulation and Model Exchange
+//! state machines, parameter and input values by value reference, stepping
+//! with the native engine between communication points (Co-Simulation) or
+//! the model's own right-hand side for the importer's solver (Model
+//! Exchange, time events at the reference's breakpoints), FMU state
+//! snapshots and their byte form, and directional derivatives of outputs
+//! and state derivatives. The C ABI in [`crate::exports`] is a thin face
+//! over this type.
 
 use std::path::Path;
 
@@ -153,6 +156,30 @@ pub enum CallError {
     Unsupported(String),
 }
 
+/// Which FMI 2.0 interface an instance serves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Interface {
+    /// The importer's solver integrates the states (fmi2ModelExchange).
+    ModelExchange,
+    /// The unit integrates between communication points (fmi2CoSimulation).
+    CoSimulation,
+}
+
+/// The continuous state of a Model Exchange instance: the time and state
+/// the importer last set.
+#[derive(Debug, Clone, PartialEq)]
+struct Continuous {
+    t: f64,
+    x: Vec<f64>,
+}
+
+/// What fmi2NewDiscreteStates reports: the next time event, if any.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EventInfo {
+    /// The next time the reference is not smooth, after the current time.
+    pub next_event_time: Option<f64>,
+}
+
 /// The study an instance was made from, before any parameter change.
 #[derive(Debug, Clone)]
 struct Source {
@@ -160,8 +187,9 @@ struct Source {
     robot: RobotSpec,
 }
 
-/// A co-simulation instance.
+/// An instance of the unit.
 pub struct Instance {
+    interface: Interface,
     source: Source,
     variables: Vec<Variable>,
     guid: String,
@@ -180,6 +208,10 @@ pub struct Instance {
     outputs: Vec<f64>,
     outputs_valid: bool,
     workspace: Workspace,
+    /// Model Exchange: the importer's time and state after initialisation.
+    continuous: Option<Continuous>,
+    /// The number of continuous states the model description declares.
+    described_states: usize,
 }
 
 impl std::fmt::Debug for Instance {
@@ -220,9 +252,19 @@ fn start_values(variables: &[Variable]) -> Vec<f64> {
 }
 
 impl Instance {
-    /// An instance of the unit whose resources are in `resources`. When `guid` is
-    /// given it must equal the GUID of the description those resources produce.
+    /// A Co-Simulation instance of the unit whose resources are in
+    /// `resources`. When `guid` is given it must equal the GUID of the
+    /// description those resources produce.
     pub fn new(resources: &Path, guid: Option<&str>) -> Result<Self, CallError> {
+        Self::for_interface(resources, guid, Interface::CoSimulation)
+    }
+
+    /// An instance serving `interface` (see [`Instance::new`]).
+    pub fn for_interface(
+        resources: &Path,
+        guid: Option<&str>,
+        interface: Interface,
+    ) -> Result<Self, CallError> {
         let source = load_source(resources).map_err(|e| CallError::Model(e.to_string()))?;
         let (_, model) = assemble(source.robot.clone(), &source.scenario)
             .map_err(|e| CallError::Model(e.to_string()))?;
@@ -238,7 +280,11 @@ impl Instance {
         let variables = variables(&model, &source.scenario);
         let values = start_values(&variables);
         let n_outputs = model.signals().len();
+        let described_states = model.n_states();
         Ok(Self {
+            interface,
+            continuous: None,
+            described_states,
             workspace: model.workspace(),
             guid: own_guid,
             model_values: values.clone(),
@@ -283,12 +329,34 @@ impl Instance {
         &self.variables
     }
 
-    /// Current time: the last communication point reached.
+    /// The interface this instance serves.
+    pub fn interface(&self) -> Interface {
+        self.interface
+    }
+
+    /// Current time: the last communication point reached (Co-Simulation)
+    /// or the time the importer set (Model Exchange).
     pub fn time(&self) -> f64 {
+        if let Some(c) = &self.continuous {
+            return c.t;
+        }
         self.stepper
             .as_ref()
             .map(Stepper::time)
             .unwrap_or(self.start_time)
+    }
+
+    fn require_interface(&self, call: &'static str, wanted: Interface) -> Result<(), CallError> {
+        if self.interface == wanted {
+            return Ok(());
+        }
+        let (name, other) = match wanted {
+            Interface::ModelExchange => ("Model Exchange", "Co-Simulation"),
+            Interface::CoSimulation => ("Co-Simulation", "Model Exchange"),
+        };
+        Err(CallError::InvalidArgument(format!(
+            "{call} is a {name} function; this instance was instantiated for {other}"
+        )))
     }
 
     fn require(&self, call: &'static str, allowed: &[Phase]) -> Result<(), CallError> {
@@ -327,14 +395,35 @@ impl Instance {
     }
 
     /// fmi2ExitInitializationMode: builds the model with the parameters set
-    /// and computes the scenario's initial state.
+    /// and computes the scenario's initial state; a Model Exchange instance
+    /// goes to event mode, a Co-Simulation one is ready to step.
     pub fn exit_initialization(&mut self) -> Result<(), CallError> {
         self.require("fmi2ExitInitializationMode", &[Phase::Initialization])?;
         let x0 = self.initial_state()?;
-        self.stepper = Some(Stepper::new(self.start_time, x0, self.stepper_tolerances()));
+        match self.interface {
+            Interface::CoSimulation => {
+                self.stepper = Some(Stepper::new(self.start_time, x0, self.stepper_tolerances()));
+                self.phase = Phase::StepComplete;
+            }
+            Interface::ModelExchange => {
+                if x0.len() != self.described_states {
+                    return Err(CallError::Model(format!(
+                        "the parameters set give {} continuous states where the model description \
+                         declares {} (k_i switches the error integral on or off): a Model \
+                         Exchange importer cannot follow that; export the FMU with the gains wanted",
+                        x0.len(),
+                        self.described_states
+                    )));
+                }
+                self.continuous = Some(Continuous {
+                    t: self.start_time,
+                    x: x0,
+                });
+                self.phase = Phase::EventMode;
+            }
+        }
         self.initial = None;
         self.outputs_valid = false;
-        self.phase = Phase::StepComplete;
         Ok(())
     }
 
@@ -346,6 +435,8 @@ impl Instance {
                 Phase::StepComplete,
                 Phase::StepFailed,
                 Phase::Initialization,
+                Phase::EventMode,
+                Phase::ContinuousTime,
             ],
         )?;
         self.phase = Phase::Terminated;
@@ -366,6 +457,7 @@ impl Instance {
         self.stop_time = None;
         self.tolerance = None;
         self.stepper = None;
+        self.continuous = None;
         self.initial = None;
         self.outputs_valid = false;
         Ok(())
@@ -447,6 +539,9 @@ impl Instance {
         if self.stepper.is_none() && self.initial.is_none() {
             self.initial = Some(self.initial_state()?);
         }
+        if let Some(c) = &self.continuous {
+            return Ok(&c.x);
+        }
         match (&self.stepper, &self.initial) {
             (Some(stepper), _) => Ok(stepper.state()),
             (None, Some(x)) => Ok(x),
@@ -472,17 +567,20 @@ impl Instance {
         Ok(())
     }
 
+    /// The phases in which values and derivatives can be read.
+    const READABLE: [Phase; 6] = [
+        Phase::Initialization,
+        Phase::StepComplete,
+        Phase::StepFailed,
+        Phase::Terminated,
+        Phase::EventMode,
+        Phase::ContinuousTime,
+    ];
+
     /// fmi2GetReal.
     pub fn get_real(&mut self, vrs: &[u32], values: &mut [f64]) -> Result<(), CallError> {
-        self.require(
-            "fmi2GetReal",
-            &[
-                Phase::Initialization,
-                Phase::StepComplete,
-                Phase::StepFailed,
-                Phase::Terminated,
-            ],
-        )?;
+        self.require("fmi2GetReal", &Self::READABLE)?;
+        let mut rates: Option<Vec<f64>> = None;
         for (&vr, value) in vrs.iter().zip(values.iter_mut()) {
             let binding = self.variable(vr)?.binding.clone();
             *value = match binding {
@@ -490,10 +588,51 @@ impl Instance {
                     self.refresh_outputs()?;
                     self.outputs[index]
                 }
-                _ => self.values[vr as usize],
+                Binding::State(index) => self.state_entry(vr, index)?,
+                Binding::Derivative(index) => {
+                    if rates.is_none() {
+                        rates = Some(self.rates()?);
+                    }
+                    rates.as_ref().map_or(f64::NAN, |r| r[index])
+                }
+                Binding::Parameter(_) | Binding::Input(_) => self.values[vr as usize],
             };
         }
         Ok(())
+    }
+
+    /// One entry of the current state, for the state variable `vr`.
+    fn state_entry(&mut self, vr: u32, index: usize) -> Result<f64, CallError> {
+        let x = self.current_state()?;
+        x.get(index).copied().ok_or_else(|| {
+            CallError::InvalidArgument(format!(
+                "value reference {vr}: the parameters set leave the model {} states",
+                x.len()
+            ))
+        })
+    }
+
+    /// The state derivatives at the current time, state and inputs.
+    fn rates(&mut self) -> Result<Vec<f64>, CallError> {
+        let x = self.current_state()?.to_vec();
+        if x.len() != self.described_states {
+            return Err(CallError::InvalidArgument(format!(
+                "the parameters set give the model {} states where the description declares {}",
+                x.len(),
+                self.described_states
+            )));
+        }
+        let inputs = self.held_inputs().inputs(self.time());
+        let mut dx = vec![0.0; x.len()];
+        self.model.rhs(&x, &inputs, &mut dx, &mut self.workspace);
+        if let Some(i) = dx.iter().position(|v| !v.is_finite()) {
+            return Err(CallError::Simulation(format!(
+                "the derivative of state {} is not finite at t = {} s",
+                self.model.layout().names[i],
+                self.time()
+            )));
+        }
+        Ok(dx)
     }
 
     /// fmi2SetReal. Parameters may be set until initialization ends, inputs any time before termination.
@@ -505,6 +644,8 @@ impl Instance {
                 Phase::Initialization,
                 Phase::StepComplete,
                 Phase::StepFailed,
+                Phase::EventMode,
+                Phase::ContinuousTime,
             ],
         )?;
         // Check everything first, so a refused call changes nothing.
@@ -518,6 +659,13 @@ impl Instance {
             };
             match variable.causality {
                 Causality::Output => return refuse("it is an output".into()),
+                Causality::Local => {
+                    return refuse(
+                        "it is a continuous state or derivative, computed by the unit (set \
+                         states with fmi2SetContinuousStates)"
+                            .into(),
+                    );
+                }
                 Causality::Parameter
                     if !matches!(self.phase, Phase::Instantiated | Phase::Initialization) =>
                 {
@@ -545,6 +693,7 @@ impl Instance {
 
     /// fmi2DoStep: integrates from the current communication point over `step`.
     pub fn do_step(&mut self, communication_point: f64, step: f64) -> Result<(), CallError> {
+        self.require_interface("fmi2DoStep", Interface::CoSimulation)?;
         self.require("fmi2DoStep", &[Phase::StepComplete])?;
         if !(step.is_finite() && step > 0.0) {
             return Err(CallError::InvalidArgument(format!(
@@ -615,7 +764,15 @@ impl Instance {
             start_time: self.start_time,
             stop_time: self.stop_time,
             tolerance: self.tolerance,
-            checkpoint: self.stepper.as_ref().map(|s| s.checkpoint().clone()),
+            checkpoint: match &self.continuous {
+                Some(c) => Some(fistage_sim::Checkpoint {
+                    t: c.t,
+                    x: c.x.clone(),
+                    h: 0.0,
+                    counts: Default::default(),
+                }),
+                None => self.stepper.as_ref().map(|s| s.checkpoint().clone()),
+            },
         }
     }
 
@@ -633,6 +790,18 @@ impl Instance {
             ));
         }
         check_snapshot(snapshot, &self.variables).map_err(CallError::InvalidArgument)?;
+        let saved_by = match snapshot.phase {
+            Phase::EventMode | Phase::ContinuousTime => Some(Interface::ModelExchange),
+            Phase::StepComplete | Phase::StepFailed => Some(Interface::CoSimulation),
+            _ => None,
+        };
+        if saved_by.is_some_and(|i| i != self.interface) {
+            return Err(CallError::InvalidArgument(format!(
+                "the FMU state was saved in the {} state, which this {:?} instance does not have",
+                snapshot.phase.name(),
+                self.interface
+            )));
+        }
         // Parameters first: they decide the state layout (k_i adds a state).
         let previous = self.values.clone();
         self.values = snapshot.values.clone();
@@ -660,6 +829,14 @@ impl Instance {
         self.tolerance = snapshot.tolerance;
         self.initial = None;
         self.outputs_valid = false;
+        if self.interface == Interface::ModelExchange {
+            self.stepper = None;
+            self.continuous = snapshot.checkpoint.as_ref().map(|c| Continuous {
+                t: c.t,
+                x: c.x.clone(),
+            });
+            return Ok(());
+        }
         self.stepper = snapshot.checkpoint.as_ref().map(|checkpoint| {
             let mut stepper = Stepper::new(
                 checkpoint.t,
@@ -682,8 +859,9 @@ impl Instance {
         crate::state::decode(&self.guid, bytes).map_err(CallError::InvalidArgument)
     }
 
-    /// fmi2GetDirectionalDerivative: outputs (unknowns) along a direction of
-    /// the inputs (knowns), the state held fixed, exact by dual numbers.
+    /// fmi2GetDirectionalDerivative: outputs and state derivatives
+    /// (unknowns) along a direction of the inputs and states (knowns), exact
+    /// by dual numbers through the model's own right-hand side.
     pub fn directional_derivative(
         &mut self,
         unknowns: &[u32],
@@ -691,22 +869,17 @@ impl Instance {
         seed: &[f64],
         result: &mut [f64],
     ) -> Result<(), CallError> {
-        self.require(
-            "fmi2GetDirectionalDerivative",
-            &[
-                Phase::Initialization,
-                Phase::StepComplete,
-                Phase::StepFailed,
-                Phase::Terminated,
-            ],
-        )?;
-        let mut direction = [0.0; 4];
+        self.require("fmi2GetDirectionalDerivative", &Self::READABLE)?;
+        let n = self.described_states;
+        let mut input_direction = [0.0; 4];
+        let mut state_direction = vec![0.0; n];
         for (&vr, &dv) in knowns.iter().zip(seed) {
             match self.variable(vr)?.binding {
-                Binding::Input(index) => direction[index] += dv,
+                Binding::Input(index) => input_direction[index] += dv,
+                Binding::State(index) => state_direction[index] += dv,
                 _ => {
                     return Err(CallError::InvalidArgument(format!(
-                        "known \"{}\" is not an input",
+                        "known \"{}\" is neither an input nor a continuous state",
                         self.variables[vr as usize].name
                     )));
                 }
@@ -714,22 +887,205 @@ impl Instance {
         }
         let mut rows = Vec::with_capacity(unknowns.len());
         for &vr in unknowns {
-            match self.variable(vr)?.binding {
-                Binding::Output(index) => rows.push(index),
+            match self.variable(vr)?.binding.clone() {
+                binding @ (Binding::Output(_) | Binding::Derivative(_)) => rows.push(binding),
                 _ => {
                     return Err(CallError::InvalidArgument(format!(
-                        "unknown \"{}\" is not an output",
+                        "unknown \"{}\" is neither an output nor a state derivative",
                         self.variables[vr as usize].name
                     )));
                 }
             }
         }
         let x = self.current_state()?.to_vec();
-        let inputs = self.held_inputs().inputs(self.time());
-        let derivative = self.model.output_input_derivative(&x, &inputs, &direction);
-        for (slot, index) in result.iter_mut().zip(rows) {
-            *slot = derivative[index];
+        if x.len() != n {
+            return Err(CallError::InvalidArgument(format!(
+                "the parameters set give the model {} states where the description declares {n}",
+                x.len()
+            )));
         }
+        let inputs = self.held_inputs().inputs(self.time());
+        let (rates, outputs) = self.model.directional_derivative(
+            &x,
+            &inputs,
+            Some(&state_direction),
+            &input_direction,
+        );
+        for (slot, binding) in result.iter_mut().zip(rows) {
+            *slot = match binding {
+                Binding::Output(index) => outputs[index],
+                Binding::Derivative(index) => rates[index],
+                _ => f64::NAN,
+            };
+        }
+        Ok(())
+    }
+
+    /// fmi2SetTime (Model Exchange).
+    pub fn set_time(&mut self, t: f64) -> Result<(), CallError> {
+        self.require_interface("fmi2SetTime", Interface::ModelExchange)?;
+        self.require("fmi2SetTime", &[Phase::EventMode, Phase::ContinuousTime])?;
+        if !t.is_finite() {
+            return Err(CallError::InvalidArgument(format!(
+                "time must be finite, got {t}"
+            )));
+        }
+        if let Some(c) = self.continuous.as_mut() {
+            c.t = t;
+        }
+        self.outputs_valid = false;
+        Ok(())
+    }
+
+    /// fmi2SetContinuousStates (Model Exchange).
+    pub fn set_continuous_states(&mut self, x: &[f64]) -> Result<(), CallError> {
+        let call = "fmi2SetContinuousStates";
+        self.require_interface(call, Interface::ModelExchange)?;
+        self.require(call, &[Phase::EventMode, Phase::ContinuousTime])?;
+        if x.len() != self.described_states {
+            return Err(CallError::InvalidArgument(format!(
+                "nx = {} where the unit has {} continuous states",
+                x.len(),
+                self.described_states
+            )));
+        }
+        if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+            return Err(CallError::InvalidArgument(format!(
+                "state {} (\"{}\") is {}",
+                i,
+                self.model.layout().names[i],
+                x[i]
+            )));
+        }
+        if let Some(c) = self.continuous.as_mut() {
+            c.x.copy_from_slice(x);
+        }
+        self.outputs_valid = false;
+        Ok(())
+    }
+
+    /// The phases in which the continuous states can be read.
+    const STATES_READABLE: [Phase; 4] = [
+        Phase::Initialization,
+        Phase::EventMode,
+        Phase::ContinuousTime,
+        Phase::Terminated,
+    ];
+
+    /// Checks a Model Exchange read of `n` entries per state.
+    fn check_state_read(&self, call: &'static str, n: usize) -> Result<(), CallError> {
+        self.require_interface(call, Interface::ModelExchange)?;
+        self.require(call, &Self::STATES_READABLE)?;
+        if n != self.described_states {
+            return Err(CallError::InvalidArgument(format!(
+                "nx = {n} where the unit has {} continuous states",
+                self.described_states
+            )));
+        }
+        Ok(())
+    }
+
+    /// fmi2GetContinuousStates (Model Exchange).
+    pub fn get_continuous_states(&mut self, x: &mut [f64]) -> Result<(), CallError> {
+        self.check_state_read("fmi2GetContinuousStates", x.len())?;
+        let state = self.current_state()?;
+        if state.len() != x.len() {
+            return Err(CallError::InvalidArgument(format!(
+                "the parameters set give the model {} states where the description declares {}",
+                state.len(),
+                x.len()
+            )));
+        }
+        x.copy_from_slice(state);
+        Ok(())
+    }
+
+    /// fmi2GetDerivatives (Model Exchange).
+    pub fn get_derivatives(&mut self, dx: &mut [f64]) -> Result<(), CallError> {
+        self.check_state_read("fmi2GetDerivatives", dx.len())?;
+        let rates = self.rates()?;
+        dx.copy_from_slice(&rates);
+        Ok(())
+    }
+
+    /// fmi2GetNominalsOfContinuousStates (Model Exchange): the typical size
+    /// of each state, as the unit's own solver scales its tolerances.
+    pub fn get_nominals(&mut self, nominals: &mut [f64]) -> Result<(), CallError> {
+        let call = "fmi2GetNominalsOfContinuousStates";
+        self.require_interface(call, Interface::ModelExchange)?;
+        self.require(
+            call,
+            &[
+                Phase::Instantiated,
+                Phase::Initialization,
+                Phase::EventMode,
+                Phase::ContinuousTime,
+                Phase::Terminated,
+            ],
+        )?;
+        let nominal = &self.model.layout().nominal;
+        if nominals.len() != nominal.len() {
+            return Err(CallError::InvalidArgument(format!(
+                "nx = {} where the unit has {} continuous states",
+                nominals.len(),
+                nominal.len()
+            )));
+        }
+        nominals.copy_from_slice(nominal);
+        Ok(())
+    }
+
+    /// fmi2GetEventIndicators (Model Exchange): the unit has none (its only
+    /// events are time events).
+    pub fn get_event_indicators(&mut self, n: usize) -> Result<(), CallError> {
+        let call = "fmi2GetEventIndicators";
+        self.require_interface(call, Interface::ModelExchange)?;
+        self.require(call, &Self::STATES_READABLE)?;
+        if n != 0 {
+            return Err(CallError::InvalidArgument(format!(
+                "ni = {n} where the unit has no event indicators"
+            )));
+        }
+        Ok(())
+    }
+
+    /// fmi2EnterEventMode (Model Exchange).
+    pub fn enter_event_mode(&mut self) -> Result<(), CallError> {
+        self.require_interface("fmi2EnterEventMode", Interface::ModelExchange)?;
+        self.require(
+            "fmi2EnterEventMode",
+            &[Phase::ContinuousTime, Phase::EventMode],
+        )?;
+        self.phase = Phase::EventMode;
+        Ok(())
+    }
+
+    /// fmi2NewDiscreteStates (Model Exchange): no discrete states change;
+    /// the next time event is the reference's next breakpoint.
+    pub fn new_discrete_states(&mut self) -> Result<EventInfo, CallError> {
+        self.require_interface("fmi2NewDiscreteStates", Interface::ModelExchange)?;
+        self.require("fmi2NewDiscreteStates", &[Phase::EventMode])?;
+        let t = self.time();
+        let margin = 1e-12 * t.abs().max(1.0);
+        let next_event_time = (self.source.scenario.reference.breakpoints().into_iter())
+            .filter(|&b| b > t + margin)
+            .min_by(f64::total_cmp);
+        Ok(EventInfo { next_event_time })
+    }
+
+    /// fmi2EnterContinuousTimeMode (Model Exchange).
+    pub fn enter_continuous_time_mode(&mut self) -> Result<(), CallError> {
+        self.require_interface("fmi2EnterContinuousTimeMode", Interface::ModelExchange)?;
+        self.require("fmi2EnterContinuousTimeMode", &[Phase::EventMode])?;
+        self.phase = Phase::ContinuousTime;
+        Ok(())
+    }
+
+    /// fmi2CompletedIntegratorStep (Model Exchange): never asks for an event
+    /// or the end of the simulation.
+    pub fn completed_integrator_step(&mut self) -> Result<(), CallError> {
+        self.require_interface("fmi2CompletedIntegratorStep", Interface::ModelExchange)?;
+        self.require("fmi2CompletedIntegratorStep", &[Phase::ContinuousTime])?;
         Ok(())
     }
 }

@@ -1,6 +1,8 @@
 //! Misuse of the C functions never crashes the host: calls out of order, null
 //! pointers, unknown value references, bad step sizes, double frees, a panic
-//! inside the model, and a long generated sequence of random calls. Every
+//! inside the model, Model Exchange calls in the wrong mode or interface,
+//! and a long generated sequence of random calls on a Co-Simulation and a
+//! Model Exchange instance. Every
 //! refusal returns fmi2Error (or fmi2Fatal for the panic) and says why through
 //! the logger.
 //!
@@ -89,13 +91,23 @@ struct Unit {
 }
 
 fn instantiate(log: &Log, name: &str) -> Unit {
+    instantiate_as(log, name, 1)
+}
+
+/// A Model Exchange instance (fmuType 0) of the misuse stage.
+fn instantiate_model_exchange(log: &Log, name: &str) -> Unit {
+    instantiate_as(log, name, 0)
+}
+
+/// An instance for `fmu_type` (0 Model Exchange, 1 Co-Simulation).
+fn instantiate_as(log: &Log, name: &str, fmu_type: c_int) -> Unit {
     let (uri, guid) = resources(name);
     let functions = Box::new(callbacks(log));
     // SAFETY: valid strings and callbacks that outlive the instance.
     let c = unsafe {
         fmi2Instantiate(
             c"test".as_ptr(),
-            1,
+            fmu_type,
             guid.as_ptr(),
             uri.as_ptr(),
             &*functions,
@@ -208,7 +220,7 @@ fn null_pointers_are_refused() {
         assert!(none.is_null());
         let none = fmi2Instantiate(
             c"x".as_ptr(),
-            0,
+            2,
             guid.as_ptr(),
             uri.as_ptr(),
             &functions,
@@ -216,7 +228,7 @@ fn null_pointers_are_refused() {
             0,
         );
         assert!(none.is_null());
-        assert!(last_error(&log).contains("Co-Simulation only"));
+        assert!(last_error(&log).contains("fmuType 2"));
         let none = fmi2Instantiate(
             c"x".as_ptr(),
             1,
@@ -283,12 +295,12 @@ fn unknown_and_unsettable_variables_are_refused_and_change_nothing() {
             fmi2GetDirectionalDerivative(unit.c, &0, 1, &output, 1, &1.0, &mut dv),
             ERROR
         );
-        assert!(last_error(&log).contains("is not an input"));
+        assert!(last_error(&log).contains("is neither an input nor a continuous state"));
         assert_eq!(
             fmi2GetDirectionalDerivative(unit.c, &0, 1, &servo_force, 1, &1.0, &mut dv),
             ERROR
         );
-        assert!(last_error(&log).contains("is not an output"));
+        assert!(last_error(&log).contains("is neither an output nor a state derivative"));
         assert_eq!(fmi2SetRealInputDerivatives(unit.c, &0, 1, &1, &1.0), ERROR);
         assert_eq!(fmi2CancelStep(unit.c), ERROR);
         let mut status = 0;
@@ -377,7 +389,10 @@ fn logger_messages_escape_percent_signs() {
 fn random_call_sequences_never_crash() {
     let log = Log::default();
     let mut rng = rand::rngs::StdRng::seed_from_u64(20261122);
-    let mut units = vec![instantiate(&log, "random_a"), instantiate(&log, "random_b")];
+    let mut units = vec![
+        instantiate(&log, "random_a"),
+        instantiate_model_exchange(&log, "random_b"),
+    ];
     let mut states: Vec<fmi2FMUstate> = Vec::new();
     let pick_f64 = |rng: &mut rand::rngs::StdRng| -> f64 {
         match rng.random_range(0..6) {
@@ -407,7 +422,32 @@ fn random_call_sequences_never_crash() {
         let mut state: fmi2FMUstate = std::ptr::null_mut();
         // SAFETY: all pointers are valid or null; the unit checks the rest.
         let status = unsafe {
-            match rng.random_range(0..16) {
+            let n = if rng.random_bool(0.8) {
+                5
+            } else {
+                rng.random_range(0..9)
+            };
+            let mut array: Vec<f64> = (0..n).map(|_| pick_f64(&mut rng)).collect();
+            let pointer = if rng.random_bool(0.05) {
+                std::ptr::null_mut()
+            } else {
+                array.as_mut_ptr()
+            };
+            match rng.random_range(0..24) {
+                16 => fmi2EnterEventMode(c),
+                17 => fmi2EnterContinuousTimeMode(c),
+                18 => {
+                    let mut info = std::mem::MaybeUninit::<crate::types::fmi2EventInfo>::zeroed();
+                    fmi2NewDiscreteStates(c, info.as_mut_ptr())
+                }
+                19 => {
+                    let (mut enter, mut terminate) = (0, 0);
+                    fmi2CompletedIntegratorStep(c, 1, &mut enter, &mut terminate)
+                }
+                20 => fmi2SetTime(c, pick_f64(&mut rng)),
+                21 => fmi2SetContinuousStates(c, pointer, n),
+                22 => fmi2GetDerivatives(c, pointer, n),
+                23 => fmi2GetContinuousStates(c, pointer, n),
                 0 => fmi2SetupExperiment(
                     c,
                     rng.random_range(0..2),
@@ -695,4 +735,145 @@ fn a_hopelessly_stiff_step_stops_at_the_units_limit_and_says_so() {
         "{error}"
     );
     assert_eq!(unit.phase(), Phase::StepFailed);
+}
+
+/// Model Exchange misuse: its functions before initialisation, in the wrong
+/// mode, on a Co-Simulation instance, with null pointers, a wrong number of
+/// states and NaN states; Co-Simulation's fmi2DoStep on a Model Exchange
+/// instance. Each is refused with a reason and changes nothing; the proper
+/// sequence then works.
+#[test]
+fn model_exchange_misuse_is_refused_with_a_reason() {
+    let log = Log::default();
+    let unit = instantiate_model_exchange(&log, "model-exchange");
+    let n = 5;
+    let mut x = vec![0.0; n];
+    // SAFETY: a live instance and arrays of the lengths given (or null).
+    unsafe {
+        assert_eq!(fmi2EnterContinuousTimeMode(unit.c), ERROR);
+        assert!(last_error(&log).contains("instantiated"));
+        assert_eq!(fmi2SetTime(unit.c, 0.1), ERROR);
+        assert_eq!(fmi2GetContinuousStates(unit.c, x.as_mut_ptr(), n), ERROR);
+        assert_eq!(fmi2SetupExperiment(unit.c, 0, 0.0, 0.0, 0, 0.0), OK);
+        assert_eq!(fmi2EnterInitializationMode(unit.c), OK);
+        assert_eq!(fmi2ExitInitializationMode(unit.c), OK);
+        // Event mode after initialisation: no integrator step yet.
+        let (mut enter, mut terminate) = (0, 0);
+        assert_eq!(
+            fmi2CompletedIntegratorStep(unit.c, 1, &mut enter, &mut terminate),
+            ERROR
+        );
+        assert!(last_error(&log).contains("event mode"));
+        assert_eq!(fmi2DoStep(unit.c, 0.0, 1e-3, 1), ERROR);
+        assert!(last_error(&log).contains("Co-Simulation function"));
+        assert_eq!(fmi2NewDiscreteStates(unit.c, std::ptr::null_mut()), ERROR);
+        assert!(last_error(&log).contains("null pointer"));
+        assert_eq!(fmi2GetContinuousStates(unit.c, x.as_mut_ptr(), n), OK);
+        let start = x.clone();
+        assert_eq!(
+            fmi2GetContinuousStates(unit.c, std::ptr::null_mut(), n),
+            ERROR
+        );
+        assert!(last_error(&log).contains("null pointer"));
+        assert_eq!(fmi2GetDerivatives(unit.c, x.as_mut_ptr(), n - 1), ERROR);
+        assert!(last_error(&log).contains("nx = 4"));
+        assert_eq!(fmi2EnterContinuousTimeMode(unit.c), OK);
+        let mut bad = start.clone();
+        bad[2] = f64::NAN;
+        assert_eq!(fmi2SetContinuousStates(unit.c, bad.as_ptr(), n), ERROR);
+        assert!(last_error(&log).contains("NaN"));
+        assert_eq!(fmi2SetTime(unit.c, f64::INFINITY), ERROR);
+        assert_eq!(fmi2GetEventIndicators(unit.c, x.as_mut_ptr(), 1), ERROR);
+        assert!(last_error(&log).contains("no event indicators"));
+        assert_eq!(fmi2GetContinuousStates(unit.c, x.as_mut_ptr(), n), OK);
+        assert_eq!(x, start, "refused calls changed the state");
+        // The proper sequence still works.
+        assert_eq!(fmi2SetTime(unit.c, 1e-3), OK);
+        assert_eq!(fmi2SetContinuousStates(unit.c, start.as_ptr(), n), OK);
+        let mut dx = vec![f64::NAN; n];
+        assert_eq!(fmi2GetDerivatives(unit.c, dx.as_mut_ptr(), n), OK);
+        assert!(dx.iter().all(|v| v.is_finite()));
+        assert_eq!(
+            fmi2CompletedIntegratorStep(unit.c, 1, &mut enter, &mut terminate),
+            OK
+        );
+        assert_eq!((enter, terminate), (0, 0));
+        assert_eq!(fmi2EnterEventMode(unit.c), OK);
+        fmi2FreeInstance(unit.c);
+    }
+    let cs = initialised(&log, "model-exchange-on-cs");
+    // SAFETY: a live instance and a local array.
+    unsafe {
+        assert_eq!(fmi2GetDerivatives(cs.c, x.as_mut_ptr(), n), ERROR);
+        assert!(last_error(&log).contains("Model Exchange function"));
+        assert_eq!(fmi2EnterEventMode(cs.c), ERROR);
+    }
+    fmi2FreeInstance(cs.c);
+}
+
+/// The Model Exchange derivatives are the model's right-hand side, and the
+/// directional derivatives of derivatives along a state equal the exact
+/// Jacobian's column; the next time event is the reference's next
+/// breakpoint.
+#[test]
+fn model_exchange_derivatives_are_the_models_own() {
+    let (uri, _) = resources("model-exchange-rhs");
+    let folder = PathBuf::from(uri.to_str().expect("URI").trim_start_matches("file://"));
+    let mut unit =
+        Instance::for_interface(&folder, None, crate::instance::Interface::ModelExchange)
+            .expect("instance");
+    unit.enter_initialization().expect("enter");
+    unit.exit_initialization().expect("exit");
+    unit.enter_continuous_time_mode().expect("continuous");
+    let n = unit.model().n_states();
+    let mut x = vec![0.0; n];
+    unit.get_continuous_states(&mut x).expect("states");
+    x[0] = 2e-6;
+    x[n - 1] = 1e-7;
+    unit.set_time(0.25).expect("time");
+    unit.set_continuous_states(&x).expect("states");
+    let mut dx = vec![0.0; n];
+    unit.get_derivatives(&mut dx).expect("derivatives");
+    let inputs = fistage_model::Inputs {
+        platform_velocity: 0.02,
+        ..Default::default()
+    };
+    let mut expected = vec![0.0; n];
+    let model = unit.model().clone();
+    model.rhs(&x, &inputs, &mut expected, &mut model.workspace());
+    assert_eq!(dx, expected);
+    let jacobian = model.jacobian(&x, &inputs);
+    let variables = unit.variables().to_vec();
+    let vr = |name: &str| {
+        (variables.iter())
+            .find(|v| v.name == name)
+            .unwrap_or_else(|| panic!("no variable {name}"))
+            .value_reference
+    };
+    let names = model.layout().names.clone();
+    let derivatives: Vec<u32> = names
+        .iter()
+        .map(|s| vr(&format!("der(state.{s})")))
+        .collect();
+    for (column, name) in names.iter().enumerate() {
+        let mut result = vec![0.0; n];
+        unit.directional_derivative(
+            &derivatives,
+            &[vr(&format!("state.{name}"))],
+            &[1.0],
+            &mut result,
+        )
+        .expect("directional derivative");
+        for row in 0..n {
+            assert_eq!(
+                result[row],
+                jacobian[(row, column)],
+                "d der({}) / d {name}",
+                names[row]
+            );
+        }
+    }
+    unit.enter_event_mode().expect("event mode");
+    let info = unit.new_discrete_states().expect("event info");
+    assert_eq!(info.next_event_time, None, "fig05b's reference is constant");
 }

@@ -1,12 +1,13 @@
-//! `modelDescription.xml` for FMI 2.0 Co-Simulation: unit definitions, the
-//! co-simulation capabilities, the default experiment from the scenario, every
-//! variable of [`crate::variables()`], and the model structure (outputs and
-//! initial unknowns). The GUID is a hash of the description itself, so the
+//! `modelDescription.xml` for FMI 2.0 Model Exchange and Co-Simulation in
+//! one unit: unit definitions, both interfaces' capabilities, the default
+//! experiment from the scenario, every variable of [`crate::variables()`]
+//! (the continuous states with their derivatives), and the model structure
+//! (outputs, derivatives and initial unknowns). The GUID is a hash of the description itself, so the
 //! same model always gets the same GUID and any change gets a new one.
 
 use fistage_model::{Model, Scenario};
 
-use crate::variables::{Causality, Variable, variables};
+use crate::variables::{Binding, Causality, Variable, variables};
 
 /// The C identifier of the exported functions' library (`binaries/linux64/<id>.so`).
 pub const MODEL_IDENTIFIER: &str = "fistage_stage";
@@ -21,10 +22,14 @@ pub struct Capabilities {
 }
 
 /// SI base-unit exponents (kg, m, s, rad) of each unit name used.
-const UNITS: [(&str, [i32; 4]); 14] = [
+const UNITS: [(&str, [i32; 4]); 18] = [
     ("1", [0, 0, 0, 0]),
+    ("1/s", [0, 0, -1, 0]),
     ("m", [0, 1, 0, 0]),
     ("m/s", [0, 1, -1, 0]),
+    ("m/s2", [0, 1, -2, 0]),
+    ("rad/s2", [0, 0, -2, 1]),
+    ("N/s", [1, 1, -3, 0]),
     ("m.s", [0, 1, 1, 0]),
     ("N", [1, 1, -2, 0]),
     ("N/m", [1, 0, -2, 0]),
@@ -68,16 +73,22 @@ fn unit_definitions(used: &[&str]) -> String {
     xml
 }
 
-fn scalar_variable(variable: &Variable) -> String {
+/// One `<ScalarVariable>`; `derivative_of` is the 1-based index of the
+/// state a derivative variable differentiates.
+fn scalar_variable(variable: &Variable, derivative_of: Option<usize>) -> String {
     let (causality, variability, initial) = match variable.causality {
         Causality::Parameter => ("parameter", "fixed", " initial=\"exact\""),
         Causality::Input => ("input", "continuous", ""),
         Causality::Output => ("output", "continuous", " initial=\"calculated\""),
+        Causality::Local => ("local", "continuous", " initial=\"calculated\""),
     };
-    let start = variable
+    let mut start = variable
         .start
         .map(|s| format!(" start=\"{}\"", number(s)))
         .unwrap_or_default();
+    if let Some(state) = derivative_of {
+        start.push_str(&format!(" derivative=\"{state}\""));
+    }
     format!(
         "    <ScalarVariable name=\"{}\" valueReference=\"{}\" description=\"{}\" causality=\"{causality}\" variability=\"{variability}\"{initial}>\n      <Real unit=\"{}\"{start}/>\n    </ScalarVariable>\n",
         escape(&variable.name),
@@ -88,8 +99,12 @@ fn scalar_variable(variable: &Variable) -> String {
 }
 
 /// Whether a name follows FMI's structured naming: identifiers
-/// (`[A-Za-z_][A-Za-z0-9_]*`) joined by dots.
+/// (`[A-Za-z_][A-Za-z0-9_]*`) joined by dots, or `der(` such a name `)`.
 fn is_structured(name: &str) -> bool {
+    let name = name
+        .strip_prefix("der(")
+        .and_then(|inner| inner.strip_suffix(')'))
+        .unwrap_or(name);
     name.split('.').all(|part| {
         let mut chars = part.chars();
         chars
@@ -139,25 +154,46 @@ pub fn model_description(model: &Model, scenario: &Scenario, capabilities: Capab
         number(scenario.solver.rtol),
         number(1.0 / scenario.sample_rate)
     ));
+    // 1-based index of each state's variable.
+    let state_index = |state: usize| {
+        (variables.iter())
+            .position(|v| v.binding == Binding::State(state))
+            .map(|i| i + 1)
+    };
     body.push_str("  <ModelVariables>\n");
     for variable in &variables {
-        body.push_str(&scalar_variable(variable));
+        let derivative_of = match variable.binding {
+            Binding::Derivative(state) => state_index(state),
+            _ => None,
+        };
+        body.push_str(&scalar_variable(variable, derivative_of));
     }
-    body.push_str("  </ModelVariables>\n  <ModelStructure>\n    <Outputs>\n");
-    let outputs: Vec<usize> = variables
-        .iter()
-        .enumerate()
-        .filter(|(_, v)| v.causality == Causality::Output)
-        .map(|(i, _)| i + 1)
-        .collect();
-    for index in &outputs {
-        body.push_str(&format!("      <Unknown index=\"{index}\"/>\n"));
+    let indices = |keep: &dyn Fn(&Variable) -> bool| -> Vec<usize> {
+        (variables.iter().enumerate())
+            .filter(|(_, v)| keep(v))
+            .map(|(i, _)| i + 1)
+            .collect()
+    };
+    let outputs = indices(&|v| v.causality == Causality::Output);
+    let derivatives = indices(&|v| matches!(v.binding, Binding::Derivative(_)));
+    // Outputs, states and derivatives are all computed at initialisation.
+    let initial = indices(&|v| matches!(v.causality, Causality::Output | Causality::Local));
+    body.push_str("  </ModelVariables>\n  <ModelStructure>\n");
+    for (element, list) in [
+        ("Outputs", &outputs),
+        ("Derivatives", &derivatives),
+        ("InitialUnknowns", &initial),
+    ] {
+        if list.is_empty() {
+            continue;
+        }
+        body.push_str(&format!("    <{element}>\n"));
+        for index in list {
+            body.push_str(&format!("      <Unknown index=\"{index}\"/>\n"));
+        }
+        body.push_str(&format!("    </{element}>\n"));
     }
-    body.push_str("    </Outputs>\n    <InitialUnknowns>\n");
-    for index in &outputs {
-        body.push_str(&format!("      <Unknown index=\"{index}\"/>\n"));
-    }
-    body.push_str("    </InitialUnknowns>\n  </ModelStructure>\n");
+    body.push_str("  </ModelStructure>\n");
     let flag = |b: bool| if b { "true" } else { "false" };
     let title = if scenario.title.is_empty() {
         model.name().to_string()
@@ -177,8 +213,14 @@ pub fn model_description(model: &Model, scenario: &Scenario, capabilities: Capab
         escape(&title),
         env!("CARGO_PKG_VERSION"),
     );
+    let model_exchange = format!(
+        "  <ModelExchange modelIdentifier=\"{MODEL_IDENTIFIER}\" needsExecutionTool=\"false\" completedIntegratorStepNotNeeded=\"true\" canBeInstantiatedOnlyOncePerProcess=\"false\" canNotUseMemoryManagementFunctions=\"true\" canGetAndSetFMUstate=\"{}\" canSerializeFMUstate=\"{}\" providesDirectionalDerivative=\"{}\"/>\n",
+        flag(capabilities.fmu_state),
+        flag(capabilities.fmu_state),
+        flag(capabilities.directional_derivatives),
+    );
     let cosimulation = format!(
-        "  <CoSimulation modelIdentifier=\"{MODEL_IDENTIFIER}\" needsExecutionTool=\"false\" canHandleVariableCommunicationStepSize=\"true\" canInterpolateInputs=\"false\" maxOutputDerivativeOrder=\"0\" canRunAsynchronuously=\"false\" canBeInstantiatedOnlyOncePerProcess=\"false\" canNotUseMemoryManagementFunctions=\"true\" canGetAndSetFMUstate=\"{}\" canSerializeFMUstate=\"{}\" providesDirectionalDerivative=\"{}\"/>\n",
+        "{model_exchange}  <CoSimulation modelIdentifier=\"{MODEL_IDENTIFIER}\" needsExecutionTool=\"false\" canHandleVariableCommunicationStepSize=\"true\" canInterpolateInputs=\"false\" maxOutputDerivativeOrder=\"0\" canRunAsynchronuously=\"false\" canBeInstantiatedOnlyOncePerProcess=\"false\" canNotUseMemoryManagementFunctions=\"true\" canGetAndSetFMUstate=\"{}\" canSerializeFMUstate=\"{}\" providesDirectionalDerivative=\"{}\"/>\n",
         flag(capabilities.fmu_state),
         flag(capabilities.fmu_state),
         flag(capabilities.directional_derivatives),

@@ -234,7 +234,8 @@ fn library_without_debug_info(library: &Path, scratch: &Path) -> Result<Vec<u8>,
 }
 
 /// The FMI functions every packaged library must export.
-const REQUIRED_EXPORTS: [&str; 4] = [
+const REQUIRED_EXPORTS: [&str; 5] = [
+    "fmi2GetDerivatives",
     "fmi2Instantiate",
     "fmi2DoStep",
     "fmi2GetReal",

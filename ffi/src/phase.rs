@@ -1,7 +1,7 @@
-//! The FMI 2.0 Co-Simulation state machine's phases, and their one-byte
-//! code in serialized FMU states.
+//! The FMI 2.0 state machines' phases (Co-Simulation and Model Exchange),
+//! and their one-byte code in serialized FMU states.
 
-/// Where an instance is in the FMI 2.0 Co-Simulation state machine.
+/// Where an instance is in its FMI 2.0 state machine.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Phase {
     /// After fmi2Instantiate or fmi2Reset: parameters and inputs may be set.
@@ -16,6 +16,10 @@ pub enum Phase {
     Terminated,
     /// An internal error made the instance unusable; only fmi2FreeInstance helps.
     Fatal,
+    /// Model Exchange: at an event (after initialisation or fmi2EnterEventMode).
+    EventMode,
+    /// Model Exchange: the importer integrates the continuous states.
+    ContinuousTime,
 }
 
 impl Phase {
@@ -27,6 +31,8 @@ impl Phase {
             Phase::StepFailed => "step failed",
             Phase::Terminated => "terminated",
             Phase::Fatal => "fatal error",
+            Phase::EventMode => "event mode",
+            Phase::ContinuousTime => "continuous-time mode",
         }
     }
 
@@ -42,6 +48,8 @@ impl Phase {
             Phase::StepFailed,
             Phase::Terminated,
             Phase::Fatal,
+            Phase::EventMode,
+            Phase::ContinuousTime,
         ]
         .into_iter()
         .find(|p| p.code() == code)

@@ -196,7 +196,11 @@ pub fn decode(guid: &str, bytes: &[u8]) -> Result<Snapshot, String> {
     }
     if matches!(
         phase,
-        Phase::StepComplete | Phase::StepFailed | Phase::Terminated
+        Phase::StepComplete
+            | Phase::StepFailed
+            | Phase::Terminated
+            | Phase::EventMode
+            | Phase::ContinuousTime
     ) && checkpoint.is_none()
     {
         return Err("FMU state is corrupt: a stepping phase without a state vector".into());

@@ -78,8 +78,27 @@ pub(crate) enum Status {
     Fatal = 4,
 }
 
+/// `fmi2Type` value of Model Exchange.
+pub(crate) const MODEL_EXCHANGE: c_int = 0;
 /// `fmi2Type` value of Co-Simulation.
 pub(crate) const CO_SIMULATION: c_int = 1;
+
+/// What fmi2NewDiscreteStates tells a Model Exchange importer.
+#[repr(C)]
+pub struct fmi2EventInfo {
+    /// Another event iteration is needed.
+    pub newDiscreteStatesNeeded: fmi2Boolean,
+    /// The simulation should end.
+    pub terminateSimulation: fmi2Boolean,
+    /// The nominal values of the states changed.
+    pub nominalsOfContinuousStatesChanged: fmi2Boolean,
+    /// The values of the states changed.
+    pub valuesOfContinuousStatesChanged: fmi2Boolean,
+    /// `nextEventTime` holds the next time event.
+    pub nextEventTimeDefined: fmi2Boolean,
+    /// The next time event, s.
+    pub nextEventTime: fmi2Real,
+}
 
 /// `fmi2StatusKind` values.
 pub(crate) mod status_kind {

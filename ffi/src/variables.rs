@@ -2,7 +2,9 @@
 //! parameters (the entries of the model's parameter table that an FMU offers:
 //! servo gains, every LuGre contact's six parameters, every isolator's
 //! stiffness and damping), then the model inputs (reference, external servo
-//! force, platform velocity), then every output signal.
+//! force, platform velocity), then every output signal, then the continuous
+//! states (`state.<name>`) and their derivatives (`der(state.<name>)`), which
+//! Model Exchange importers integrate.
 
 use fistage_model::{Inputs, Model, Parameter, Scenario};
 
@@ -15,6 +17,8 @@ pub enum Causality {
     Input,
     /// Computed by the unit (variability "continuous").
     Output,
+    /// A continuous state or state derivative (causality "local").
+    Local,
 }
 
 /// What a variable reads or writes in the model.
@@ -26,6 +30,10 @@ pub enum Binding {
     Input(usize),
     /// Model output signal, index into the model's signals.
     Output(usize),
+    /// Continuous state, index into the state vector.
+    State(usize),
+    /// Derivative of a continuous state, index into the state vector.
+    Derivative(usize),
 }
 
 /// One real scalar variable.
@@ -60,6 +68,20 @@ fn fmi_unit(unit: &'static str) -> &'static str {
     match unit {
         "m s" => "m.s",
         other => other,
+    }
+}
+
+/// FMI unit name of the rate of a quantity in `unit`.
+fn rate_unit(unit: &'static str) -> &'static str {
+    match unit {
+        "m" => "m/s",
+        "rad" => "rad/s",
+        "1" => "1/s",
+        "m/s" => "m/s2",
+        "rad/s" => "rad/s2",
+        "m s" => "m",
+        "N" => "N/s",
+        _ => "",
     }
 }
 
@@ -119,6 +141,27 @@ pub fn variables(model: &Model, scenario: &Scenario) -> Vec<Variable> {
             fmi_unit(signal.unit),
             format!("output {}", signal.name),
             Binding::Output(index),
+        );
+    }
+    let layout = model.layout();
+    for (index, (name, kind)) in layout.names.iter().zip(&layout.kinds).enumerate() {
+        push(
+            format!("state.{name}"),
+            Causality::Local,
+            None,
+            fmi_unit(kind.unit()),
+            format!("continuous state {name}"),
+            Binding::State(index),
+        );
+    }
+    for (index, (name, kind)) in layout.names.iter().zip(&layout.kinds).enumerate() {
+        push(
+            format!("der(state.{name})"),
+            Causality::Local,
+            None,
+            rate_unit(kind.unit()),
+            format!("time derivative of state {name}"),
+            Binding::Derivative(index),
         );
     }
     list

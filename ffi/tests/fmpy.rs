@@ -52,14 +52,21 @@ fn validate(fmu: &Path) -> usize {
     report["variables"].as_u64().unwrap_or_default() as usize
 }
 
-/// Simulates in FMPy with the given outputs; compares each with the native run.
-fn simulate_and_compare(scenario: &str, name: &str, stop: f64, outputs: &[&str], relative: f64) {
-    let folder = support::scratch(name);
+/// Simulates in FMPy through `interface` with the given outputs; compares
+/// each with the native run.
+fn simulate_and_compare(
+    scenario: &str,
+    name: &str,
+    stop: f64,
+    outputs: &[&str],
+    (interface, relative): (&str, f64),
+) {
+    let folder = support::scratch(&format!("{name}-{interface}"));
     let fmu = support::fmu(scenario, &folder);
     let n_variables = validate(&fmu);
     assert!(n_variables > outputs.len());
     let csv = folder.join("fmpy.csv");
-    support::fmpy_simulate(&fmu, &csv, stop, outputs);
+    support::fmpy_simulate_as(&fmu, &csv, stop, outputs, interface);
     let (names, rows) = support::read_csv(&csv);
     let native = native_run(scenario, stop);
     for output in outputs {
@@ -67,7 +74,9 @@ fn simulate_and_compare(scenario: &str, name: &str, stop: f64, outputs: &[&str],
         let reference = &native[*output];
         let scale = peak_to_peak(reference).max(1e-12);
         let difference = max_difference(&fmpy, reference);
-        println!("{name} {output}: max |FMPy - native| = {difference:.3e} (p2p {scale:.3e})");
+        println!(
+            "{name} {interface} {output}: max |FMPy - native| = {difference:.3e} (p2p {scale:.3e})"
+        );
         assert!(
             difference <= relative * scale,
             "{output}: FMPy and fistage run differ by {difference:e} (p2p {scale:e})"
@@ -90,7 +99,23 @@ fn fig05b_fi_validates_and_simulates_like_fistage_run() {
             "bearing_friction.force",
             "drive.force",
         ],
-        1e-4,
+        ("CoSimulation", 1e-4),
+    );
+}
+
+/// Model Exchange: FMPy's CVode integrates the unit's derivatives (the
+/// stiff bristle state included) and reproduces the native run.
+#[test]
+fn fig05b_fi_model_exchange_in_fmpy_cvode_matches_fistage_run() {
+    if !support::fmpy_available("fig05b_fi_model_exchange_in_fmpy_cvode_matches_fistage_run") {
+        return;
+    }
+    simulate_and_compare(
+        "scenarios/paper/fig05b_fi.toml",
+        "fig05b_fi",
+        5.0,
+        &["encoder.position", "bearing_x.q", "bearing_friction.force"],
+        ("ModelExchange", 1e-3),
     );
 }
 
@@ -111,7 +136,23 @@ fn six_dof_stage_validates_and_simulates_like_fistage_run() {
             "friction_rr.force",
             "isolator_fl.dx",
         ],
-        1e-4,
+        ("CoSimulation", 1e-4),
+    );
+}
+
+/// Model Exchange on the four-bearing 6-DOF table: CVode integrates the
+/// quaternion, the isolators and four bristle states like the native run.
+#[test]
+fn six_dof_stage_model_exchange_in_fmpy_cvode_matches_fistage_run() {
+    if !support::fmpy_available("six_dof_stage_model_exchange_in_fmpy_cvode_matches_fistage_run") {
+        return;
+    }
+    simulate_and_compare(
+        "scenarios/coupling/friction20_traverse.toml",
+        "friction20_traverse",
+        0.5,
+        &["table.x", "table.yaw", "table.pitch", "friction_rr.force"],
+        ("ModelExchange", 1e-3),
     );
 }
 

@@ -1,13 +1,14 @@
 //! The seeds of the `fmu_state` fuzz target (`fuzz/corpus/fmu_state/`) are
 //! states this unit serializes today, at every phase a state can be taken in
-//! (and with the integral gain on, which adds a state): each one restores in
-//! a fresh instance and is byte for byte what the unit writes now. A change
+//! (and with the integral gain on, which adds a state), Co-Simulation and
+//! Model Exchange: each one restores in a fresh instance of its interface
+//! and is byte for byte what the unit writes now. A change
 //! of the state format fails here until the seeds are written again with
 //! `FISTAGE_WRITE_FUZZ_SEEDS=1 cargo test -p fistage-fmi --test fuzz_seeds`.
 
 use std::path::{Path, PathBuf};
 
-use fistage_fmi::Instance;
+use fistage_fmi::{Instance, Interface};
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
@@ -30,11 +31,13 @@ fn vr(instance: &Instance, name: &str) -> u32 {
         .value_reference
 }
 
-/// (file name, serialized state) for each phase.
-fn seeds(folder: &Path) -> Vec<(&'static str, Vec<u8>)> {
+/// (file name, interface, serialized state) for each phase.
+fn seeds(folder: &Path) -> Vec<(&'static str, Interface, Vec<u8>)> {
     let mut unit = Instance::new(folder, None).expect("instance");
     let mut seeds = Vec::new();
-    let mut take = |name, unit: &Instance| seeds.push((name, unit.serialize(&unit.snapshot())));
+    let mut take = |name, unit: &Instance| {
+        seeds.push((name, unit.interface(), unit.serialize(&unit.snapshot())))
+    };
     take("instantiated.bin", &unit);
     unit.setup_experiment(Some(1e-6), 0.0, Some(5.0))
         .expect("setup");
@@ -54,6 +57,18 @@ fn seeds(folder: &Path) -> Vec<(&'static str, Vec<u8>)> {
     take("stepping.bin", &unit);
     unit.terminate().expect("terminate");
     take("terminated.bin", &unit);
+    let mut unit =
+        Instance::for_interface(folder, None, Interface::ModelExchange).expect("instance");
+    unit.enter_initialization().expect("enter");
+    unit.exit_initialization().expect("exit");
+    take("model_exchange_event.bin", &unit);
+    unit.enter_continuous_time_mode().expect("continuous");
+    let mut x = vec![0.0; unit.model().n_states()];
+    unit.get_continuous_states(&mut x).expect("states");
+    x[0] += 1e-6;
+    unit.set_time(0.01).expect("time");
+    unit.set_continuous_states(&x).expect("states");
+    take("model_exchange_continuous.bin", &unit);
     seeds
 }
 
@@ -62,7 +77,7 @@ fn fuzz_seeds_are_states_of_this_unit() {
     let folder = resources();
     let corpus = root().join("fuzz/corpus/fmu_state");
     let write = std::env::var_os("FISTAGE_WRITE_FUZZ_SEEDS").is_some();
-    for (name, bytes) in seeds(&folder) {
+    for (name, interface, bytes) in seeds(&folder) {
         let file = corpus.join(name);
         if write {
             std::fs::write(&file, &bytes).expect("write seed");
@@ -73,7 +88,7 @@ fn fuzz_seeds_are_states_of_this_unit() {
             "{} is not what the unit serializes now: write the seeds again (see this file's header)",
             file.display()
         );
-        let mut fresh = Instance::new(&folder, None).expect("instance");
+        let mut fresh = Instance::for_interface(&folder, None, interface).expect("instance");
         let snapshot = fresh.deserialize(&stored).expect("seed deserializes");
         fresh.restore(&snapshot).expect("seed restores");
         assert_eq!(

@@ -1,7 +1,8 @@
 //! The model description of exported stages: well-formed XML, unique names
 //! and value references, start values equal to the model's, a model structure
-//! that lists exactly the outputs, declared units, and a GUID that is stable
-//! for the same model and changes with it.
+//! that lists exactly the outputs and, for Model Exchange, one derivative per
+//! state pointing at its state, declared units, and a GUID that is stable for
+//! the same model and changes with it.
 
 use std::collections::HashSet;
 use std::path::PathBuf;
@@ -42,6 +43,8 @@ fn check(relative: &str) -> String {
     let mut names = HashSet::new();
     let mut references = HashSet::new();
     let mut outputs = Vec::new();
+    let mut states = Vec::new();
+    let mut derivatives = Vec::new();
     for (index, variable) in variables.iter().enumerate() {
         let name = variable.attribute("name").expect("name");
         assert!(names.insert(name), "{name} twice");
@@ -63,6 +66,19 @@ fn check(relative: &str) -> String {
                 assert!(real.attribute("start").is_none());
                 outputs.push(index + 1);
             }
+            Some("local") => match real.attribute("derivative") {
+                Some(of) => {
+                    let of: usize = of.parse().expect("derivative index");
+                    let state = variables[of - 1].attribute("name").expect("name");
+                    assert_eq!(
+                        name,
+                        format!("der({state})"),
+                        "{name} differentiates {state}"
+                    );
+                    derivatives.push(index + 1);
+                }
+                None => states.push(index + 1),
+            },
             other => panic!("{name}: causality {other:?}"),
         }
     }
@@ -79,6 +95,21 @@ fn check(relative: &str) -> String {
         listed, outputs,
         "ModelStructure/Outputs lists exactly the outputs"
     );
+    assert_eq!(states.len(), loaded.model.n_states());
+    assert_eq!(derivatives.len(), loaded.model.n_states());
+    let listed: Vec<usize> = root
+        .descendants()
+        .find(|n| n.has_tag_name("Derivatives"))
+        .expect("Derivatives")
+        .children()
+        .filter_map(|n| n.attribute("index"))
+        .map(|i| i.parse().expect("index"))
+        .collect();
+    assert_eq!(
+        listed, derivatives,
+        "ModelStructure/Derivatives lists every derivative"
+    );
+    assert!(root.descendants().any(|n| n.has_tag_name("ModelExchange")));
     // Parameter starts are the model's values, exactly.
     let start = |name: &str| -> f64 {
         variables

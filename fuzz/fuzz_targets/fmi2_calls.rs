@@ -1,4 +1,5 @@
-//! Any bytes as a sequence of fmi2 calls on up to two instances: calls in and
+//! Any bytes as a sequence of fmi2 calls on up to two instances (each Model
+//! Exchange or Co-Simulation, the functions of both called on either): calls in and
 //! out of order, on freed or null instances, with awkward arguments (NaN,
 //! infinities, negative steps, unknown value references, damaged serialized
 //! states). Every call returns a status of the standard's set, never
@@ -14,12 +15,14 @@ mod support;
 use std::ffi::c_char;
 
 use fistage_fmi::exports::*;
-use fistage_fmi::types::{fmi2Component, fmi2FMUstate};
+use fistage_fmi::types::{fmi2Component, fmi2EventInfo, fmi2FMUstate};
 use libfuzzer_sys::fuzz_target;
 use support::{OK, check, errors_logged};
 
 /// Calls per input at most.
 const MAX_CALLS: usize = 256;
+/// Value references tried (a few beyond the unit's last).
+const VARIABLES: u8 = 64;
 /// The longest communication step a call may ask for, s.
 const MAX_STEP: f64 = 0.02;
 
@@ -58,17 +61,18 @@ impl Session {
 
     /// One call chosen by the next byte; returns its name and status.
     fn call(&mut self, bytes: &mut Bytes) -> Option<(&'static str, i32, bool)> {
-        let op = bytes.u8() % 20;
+        let op = bytes.u8() % 30;
         if op == 19 {
             if self.units.len() < 2 {
-                self.units.push(support::instantiate());
+                self.units
+                    .push(support::instantiate_as(i32::from(bytes.u8() % 2)));
                 self.live.push(true);
             }
             return None;
         }
         let (c, live) = self.pick(bytes);
         let vr = if bytes.u8() < 230 {
-            u32::from(bytes.u8() % 48)
+            u32::from(bytes.u8() % VARIABLES)
         } else {
             bytes.u32()
         };
@@ -134,7 +138,7 @@ impl Session {
                     ("fmi2FreeFMUstate", status)
                 }
                 12 => {
-                    let known = u32::from(bytes.u8() % 48);
+                    let known = u32::from(bytes.u8() % VARIABLES);
                     let mut derivative = 0.0;
                     (
                         "fmi2GetDirectionalDerivative",
@@ -169,6 +173,7 @@ impl Session {
                         fmi2GetStatus(c, i32::from(bytes.u8() % 6) - 1, &mut status),
                     )
                 }
+                20..=28 => self.model_exchange_call(op, bytes, c),
                 _ => {
                     fmi2FreeInstance(c);
                     if let Some(i) = self.index_of(c) {
@@ -180,6 +185,68 @@ impl Session {
             }
         };
         Some((status.0, status.1, live))
+    }
+
+    /// One Model Exchange call (`op` 20 to 28), with an array length that
+    /// may not be the unit's and values that may not be finite.
+    unsafe fn model_exchange_call(
+        &mut self,
+        op: u8,
+        bytes: &mut Bytes,
+        c: fmi2Component,
+    ) -> (&'static str, i32) {
+        let n = match bytes.u8() % 4 {
+            0 => usize::from(bytes.u8() % 40),
+            _ => 5,
+        };
+        let mut array: Vec<f64> = (0..n).map(|_| bytes.real()).collect();
+        let pointer = if bytes.u8() % 16 == 0 {
+            std::ptr::null_mut()
+        } else {
+            array.as_mut_ptr()
+        };
+        // SAFETY: `pointer` is null or holds `n` values; the rest as in `call`.
+        unsafe {
+            match op {
+                20 => ("fmi2EnterEventMode", fmi2EnterEventMode(c)),
+                21 => {
+                    let mut info = fmi2EventInfo {
+                        newDiscreteStatesNeeded: 0,
+                        terminateSimulation: 0,
+                        nominalsOfContinuousStatesChanged: 0,
+                        valuesOfContinuousStatesChanged: 0,
+                        nextEventTimeDefined: 0,
+                        nextEventTime: 0.0,
+                    };
+                    ("fmi2NewDiscreteStates", fmi2NewDiscreteStates(c, &mut info))
+                }
+                22 => (
+                    "fmi2EnterContinuousTimeMode",
+                    fmi2EnterContinuousTimeMode(c),
+                ),
+                23 => {
+                    let (mut enter, mut terminate) = (0, 0);
+                    (
+                        "fmi2CompletedIntegratorStep",
+                        fmi2CompletedIntegratorStep(c, 1, &mut enter, &mut terminate),
+                    )
+                }
+                24 => ("fmi2SetTime", fmi2SetTime(c, bytes.real())),
+                25 => (
+                    "fmi2SetContinuousStates",
+                    fmi2SetContinuousStates(c, pointer, n),
+                ),
+                26 => ("fmi2GetDerivatives", fmi2GetDerivatives(c, pointer, n)),
+                27 => (
+                    "fmi2GetContinuousStates",
+                    fmi2GetContinuousStates(c, pointer, n),
+                ),
+                _ => (
+                    "fmi2GetNominalsOfContinuousStates",
+                    fmi2GetNominalsOfContinuousStates(c, pointer, n),
+                ),
+            }
+        }
     }
 
     /// Serializes a state of `c` (or none), perhaps shortens or damages the
@@ -209,7 +276,7 @@ impl Session {
     }
 
     fn outputs_are_finite(&self, c: fmi2Component) {
-        for vr in 0..48u32 {
+        for vr in 0..u32::from(VARIABLES) {
             let mut value = 0.0;
             // SAFETY: a live instance, one reference and one value.
             if unsafe { fmi2GetReal(c, &vr, 1, &mut value) } == OK {

@@ -102,12 +102,17 @@ fn resources() -> &'static (CString, CString) {
 /// A new Co-Simulation instance of the stage (never null: the resources are
 /// the shipped scenario's).
 pub fn instantiate() -> fmi2Component {
+    instantiate_as(1)
+}
+
+/// An instance for `fmu_type` (0 Model Exchange, 1 Co-Simulation).
+pub fn instantiate_as(fmu_type: i32) -> fmi2Component {
     let (uri, guid) = resources();
     // SAFETY: valid strings, and callbacks that live for the whole process.
     let c = unsafe {
         fmi2Instantiate(
             c"fuzz".as_ptr(),
-            1,
+            fmu_type,
             guid.as_ptr(),
             uri.as_ptr(),
             callbacks(),

@@ -87,16 +87,42 @@ impl Model {
         inputs: &Inputs,
         direction: &[f64; 4],
     ) -> Vec<f64> {
-        let xd: Vec<Dual64> = x.iter().map(|v| Dual64::from_re(*v)).collect();
+        self.directional_derivative(x, inputs, None, direction).1
+    }
+
+    /// Directional derivatives at (x, u) along a state direction (none: the
+    /// state held fixed) and an input direction (in the order of
+    /// [`Inputs::NAMES`]): of the state rates `f(x, u)` and of every output.
+    /// One dual-number pass; exact to round-off.
+    pub fn directional_derivative(
+        &self,
+        x: &[f64],
+        inputs: &Inputs,
+        state_direction: Option<&[f64]>,
+        input_direction: &[f64; 4],
+    ) -> (Vec<f64>, Vec<f64>) {
+        let xd: Vec<Dual64> = match state_direction {
+            Some(dir) => x
+                .iter()
+                .zip(dir)
+                .map(|(v, d)| Dual64::new(*v, *d))
+                .collect(),
+            None => x.iter().map(|v| Dual64::from_re(*v)).collect(),
+        };
         let mut u = inputs.values::<Dual64>();
-        u.reference_position.eps = direction[0];
-        u.reference_velocity.eps = direction[1];
-        u.servo_force.eps = direction[2];
-        u.platform_velocity.eps = direction[3];
+        u.reference_position.eps = input_direction[0];
+        u.reference_velocity.eps = input_direction[1];
+        u.servo_force.eps = input_direction[2];
+        u.platform_velocity.eps = input_direction[3];
         let mut ws = self.workspace_of::<Dual64>();
+        let mut rates = vec![Dual64::from_re(0.0); self.n_states()];
+        self.rhs_of(&xd, &u, &mut rates, &mut ws);
         let mut out = vec![Dual64::from_re(0.0); self.structure.signals.len()];
         self.outputs_of(&xd, &u, &mut out, &mut ws);
-        out.iter().map(|d| d.eps).collect()
+        (
+            rates.iter().map(|d| d.eps).collect(),
+            out.iter().map(|d| d.eps).collect(),
+        )
     }
 
     /// Tangent coordinates around state x.

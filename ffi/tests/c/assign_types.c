@@ -39,6 +39,16 @@ CHECK(fmi2GetRealStatus)
 CHECK(fmi2GetIntegerStatus)
 CHECK(fmi2GetBooleanStatus)
 CHECK(fmi2GetStringStatus)
+CHECK(fmi2EnterEventMode)
+CHECK(fmi2NewDiscreteStates)
+CHECK(fmi2EnterContinuousTimeMode)
+CHECK(fmi2CompletedIntegratorStep)
+CHECK(fmi2SetTime)
+CHECK(fmi2SetContinuousStates)
+CHECK(fmi2GetDerivatives)
+CHECK(fmi2GetEventIndicators)
+CHECK(fmi2GetContinuousStates)
+CHECK(fmi2GetNominalsOfContinuousStates)
 
 int main(void) {
     /* Linked against the library: the version string comes from it. */

@@ -99,6 +99,12 @@ pub fn run_python(script: &str, args: &[&str]) -> String {
 
 /// Simulates an FMU in FMPy (`simulate_fmu`, 1 ms steps) into a CSV of the outputs.
 pub fn fmpy_simulate(fmu: &Path, csv: &Path, stop: f64, outputs: &[&str]) {
+    fmpy_simulate_as(fmu, csv, stop, outputs, "CoSimulation");
+}
+
+/// [`fmpy_simulate`] through `interface` (`CoSimulation`, or
+/// `ModelExchange` with FMPy's CVode).
+pub fn fmpy_simulate_as(fmu: &Path, csv: &Path, stop: f64, outputs: &[&str], interface: &str) {
     run_python(
         "fmpy_checks.py",
         &[
@@ -111,6 +117,8 @@ pub fn fmpy_simulate(fmu: &Path, csv: &Path, stop: f64, outputs: &[&str]) {
             "0.001",
             "--outputs",
             &outputs.join(","),
+            "--interface",
+            interface,
         ],
     );
 }
