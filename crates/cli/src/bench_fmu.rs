@@ -2,7 +2,8 @@
 //! `fmi2DoStep` is timed by calling the exported C functions in this process
 //! (the same code the shared library carries), against the continuous native
 //! run over the same span; FMPy's `simulate_fmu` is timed on the packaged FMU
-//! when a python with FMPy is available.
+//! through both interfaces (Co-Simulation, and Model Exchange with FMPy's
+//! CVode) when a python with FMPy is available.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -94,20 +95,25 @@ fn median(mut values: Vec<f64>) -> f64 {
     values[values.len() / 2]
 }
 
-/// Median wall time of FMPy's simulate_fmu over `span` at `step`, or why not.
+/// Median wall time of FMPy's simulate_fmu over `span` at `step` through
+/// `interface` (`CoSimulation`, or `ModelExchange` with CVode), or why not.
 fn fmpy_time(
     python: &Path,
     fmu: &Path,
-    span: f64,
-    step: f64,
+    (span, step): (f64, f64),
+    interface: &str,
     repeat: usize,
 ) -> Result<f64, String> {
+    let solver = match interface {
+        "ModelExchange" => ", solver='CVode'",
+        _ => "",
+    };
     let script = format!(
         "import time, fmpy\n\
          times = []\n\
          for _ in range({repeat}):\n\
          \x20   start = time.perf_counter()\n\
-         \x20   fmpy.simulate_fmu({fmu:?}, stop_time={span}, output_interval={step})\n\
+         \x20   fmpy.simulate_fmu({fmu:?}, stop_time={span}, output_interval={step}, fmi_type='{interface}'{solver})\n\
          \x20   times.append(time.perf_counter() - start)\n\
          times.sort()\n\
          print(times[len(times) // 2])\n",
@@ -137,9 +143,9 @@ pub fn fmu_table(python: &Path, repeat: usize) -> anyhow::Result<()> {
             "libfistage_fmi.so not found beside this program (cargo build --release -p fistage)",
         )?;
     println!(
-        "| scenario | span s | step ms | doSteps | native run ms | via fmi2DoStep ms | µs per fmi2DoStep | FMPy simulate_fmu s |"
+        "| scenario | span s | step ms | doSteps | native run ms | via fmi2DoStep ms | µs per fmi2DoStep | FMPy CS s | FMPy ME (CVode) s |"
     );
-    println!("|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|");
     for (scenario, span) in [
         ("scenarios/paper/fig05b_fi.toml", 10.0),
         ("scenarios/coupling/friction20_traverse.toml", 1.0),
@@ -170,16 +176,18 @@ pub fn fmu_table(python: &Path, repeat: usize) -> anyhow::Result<()> {
         );
         let fmu = scratch.0.join(format!("{name}.fmu"));
         std::fs::write(&fmu, fistage_fmi::build_fmu(&scenario, &library)?)?;
-        let fmpy = match fmpy_time(python, &fmu, span, step, 3.min(runs)) {
-            Ok(seconds) => format!("{seconds:.2}"),
-            Err(why) => {
-                eprintln!("FMPy not timed: {why}");
-                "n/a".into()
-            }
-        };
+        let fmpy =
+            |interface: &str| match fmpy_time(python, &fmu, (span, step), interface, 3.min(runs)) {
+                Ok(seconds) => format!("{seconds:.2}"),
+                Err(why) => {
+                    eprintln!("FMPy ({interface}) not timed: {why}");
+                    "n/a".into()
+                }
+            };
+        let (cs, me) = (fmpy("CoSimulation"), fmpy("ModelExchange"));
         let steps = (span / step).round();
         println!(
-            "| {name} | {span} | {} | {steps} | {:.1} | {:.1} | {:.1} | {fmpy} |",
+            "| {name} | {span} | {} | {steps} | {:.1} | {:.1} | {:.1} | {cs} | {me} |",
             step * 1e3,
             native * 1e3,
             direct * 1e3,
