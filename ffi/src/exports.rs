@@ -24,9 +24,9 @@ use crate::types::{
 };
 
 /// An instance with its logger and the FMU states it handed out.
-struct Slot {
-    instance: Instance,
-    logger: Logger,
+pub(crate) struct Slot {
+    pub(crate) instance: Instance,
+    pub(crate) logger: Logger,
     states: BTreeSet<usize>,
 }
 
@@ -42,11 +42,11 @@ fn lock<T>(mutex: &Mutex<T>) -> MutexGuard<'_, T> {
         .unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
-fn code(status: Status) -> fmi2Status {
+pub(crate) fn code(status: Status) -> fmi2Status {
     status as fmi2Status
 }
 
-fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
+pub(crate) fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
     payload
         .downcast_ref::<&str>()
         .map(|s| (*s).to_string())
@@ -55,7 +55,7 @@ fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
 }
 
 /// Runs `body` on the instance behind `c`, if it is live and usable.
-fn with_slot(
+pub(crate) fn with_slot(
     c: fmi2Component,
     call: &'static str,
     body: impl FnOnce(&mut Slot) -> Result<Status, CallError>,
@@ -122,7 +122,7 @@ fn with_slot(
 ///
 /// # Safety
 /// A non-null `pointer` points to `n` valid elements.
-unsafe fn input_slice<'a, T>(
+pub(crate) unsafe fn input_slice<'a, T>(
     pointer: *const T,
     n: usize,
     what: &str,
@@ -143,7 +143,7 @@ unsafe fn input_slice<'a, T>(
 ///
 /// # Safety
 /// A non-null `pointer` points to `n` valid, writable elements.
-unsafe fn output_slice<'a, T>(
+pub(crate) unsafe fn output_slice<'a, T>(
     pointer: *mut T,
     n: usize,
     what: &str,
@@ -160,7 +160,7 @@ unsafe fn output_slice<'a, T>(
     Ok(unsafe { std::slice::from_raw_parts_mut(pointer, n) })
 }
 
-fn text(pointer: fmi2String) -> Option<String> {
+pub(crate) fn text(pointer: fmi2String) -> Option<String> {
     if pointer.is_null() {
         return None;
     }
@@ -290,13 +290,17 @@ fn instantiate(
         Ok(instance) => instance,
         Err(error) => return fail(error.to_string()),
     };
+    logger.trace(&format!("fmi2Instantiate: resources {}", folder.display()));
+    register(instance, logger)
+}
+
+/// Boxes an instance with its logger and makes its address live.
+pub(crate) fn register(instance: Instance, logger: Logger) -> fmi2Component {
     let slot = Box::new(Slot {
         instance,
         logger,
         states: BTreeSet::new(),
     });
-    slot.logger
-        .trace(&format!("fmi2Instantiate: resources {}", folder.display()));
     let pointer = Box::into_raw(slot);
     lock(&LIVE).insert(pointer as usize);
     lock(&FREED).retain(|(a, _)| *a != pointer as usize);

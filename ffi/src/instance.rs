@@ -334,6 +334,11 @@ impl Instance {
         self.interface
     }
 
+    /// The number of continuous states the model description declares.
+    pub fn n_continuous_states(&self) -> usize {
+        self.described_states
+    }
+
     /// Current time: the last communication point reached (Co-Simulation)
     /// or the time the importer set (Model Exchange).
     pub fn time(&self) -> f64 {
@@ -1091,7 +1096,7 @@ impl Instance {
 }
 
 /// The `guid="..."` attribute of a model description.
-fn description_guid(description: &str) -> String {
+pub(crate) fn description_guid(description: &str) -> String {
     description
         .split_once("guid=\"")
         .and_then(|(_, rest)| rest.split_once('"'))

@@ -1,11 +1,20 @@
-//! Messages to the importer through its logger callback. The callback takes a
-//! printf format, so every `%` in a message is doubled; interior NUL bytes
-//! become spaces. Errors are always reported; call traces only with debug
-//! logging on.
+//! Messages to the importer through its logger callback: FMI 2.0's takes a
+//! printf format, so every `%` in a message is doubled; FMI 3.0's takes the
+//! text as it is, and the function names in it are FMI 3.0's. Interior NUL
+//! bytes become spaces. Errors are always reported; call traces only with
+//! debug logging on.
 
 use std::ffi::{CString, c_int};
 
+use crate::fmi3::types::fmi3LogMessageCallback;
 use crate::types::{Status, fmi2CallbackFunctions, fmi2CallbackLogger, fmi2ComponentEnvironment};
+
+/// The importer's callback, of either standard.
+#[derive(Clone, Copy)]
+enum Sink {
+    Fmi2(fmi2CallbackLogger),
+    Fmi3(fmi3LogMessageCallback),
+}
 
 /// Log categories the unit declares in its model description.
 pub const LOG_CATEGORIES: [(&str, &str); 2] = [
@@ -22,7 +31,7 @@ pub const LOG_CATEGORIES: [(&str, &str); 2] = [
 /// The importer's logger and what identifies this instance to it.
 #[derive(Clone)]
 pub(crate) struct Logger {
-    callback: fmi2CallbackLogger,
+    callback: Sink,
     environment: fmi2ComponentEnvironment,
     instance_name: CString,
     /// Whether debug messages (call traces) are sent.
@@ -53,7 +62,22 @@ impl Logger {
             None => (None, std::ptr::null_mut()),
         };
         Self {
-            callback,
+            callback: Sink::Fmi2(callback),
+            environment,
+            instance_name: c_text(instance_name),
+            debug,
+        }
+    }
+
+    /// A logger from an FMI 3.0 importer's callback (which may be null).
+    pub(crate) fn fmi3(
+        callback: fmi3LogMessageCallback,
+        environment: fmi2ComponentEnvironment,
+        instance_name: &str,
+        debug: bool,
+    ) -> Self {
+        Self {
+            callback: Sink::Fmi3(callback),
             environment,
             instance_name: c_text(instance_name),
             debug,
@@ -62,21 +86,35 @@ impl Logger {
 
     /// Sends one message.
     pub(crate) fn log(&self, status: Status, category: &str, message: &str) {
-        let Some(callback) = self.callback else {
-            return;
-        };
         let category = c_text(category);
-        let message = c_text(&message.replace('%', "%%"));
-        // SAFETY: the importer gave this callback for this instance; all
-        // strings are valid and NUL-terminated for the duration of the call.
-        unsafe {
-            callback(
-                self.environment,
-                self.instance_name.as_ptr(),
-                status as c_int,
-                category.as_ptr(),
-                message.as_ptr(),
-            );
+        match self.callback {
+            Sink::Fmi2(None) | Sink::Fmi3(None) => {}
+            Sink::Fmi2(Some(callback)) => {
+                let message = c_text(&message.replace('%', "%%"));
+                // SAFETY: the importer gave this callback for this instance; all
+                // strings are valid and NUL-terminated for the duration of the call.
+                unsafe {
+                    callback(
+                        self.environment,
+                        self.instance_name.as_ptr(),
+                        status as c_int,
+                        category.as_ptr(),
+                        message.as_ptr(),
+                    );
+                }
+            }
+            Sink::Fmi3(Some(callback)) => {
+                let message = c_text(&message.replace("fmi2", "fmi3"));
+                // SAFETY: as above.
+                unsafe {
+                    callback(
+                        self.environment,
+                        status as c_int,
+                        category.as_ptr(),
+                        message.as_ptr(),
+                    );
+                }
+            }
         }
     }
 

@@ -37,8 +37,22 @@ unsafe extern "C" fn record(
     category: *const c_char,
     message: *const c_char,
 ) {
-    // SAFETY: the environment is the `Log` of the test that made the instance;
-    // the strings are valid for the duration of the call.
+    // SAFETY: by the logger's contract.
+    unsafe { push(environment, status, category, message) }
+}
+
+/// Records one message in the `Log` behind `environment`.
+///
+/// # Safety
+/// The environment is the `Log` of the test that made the instance; the
+/// strings are valid for the duration of the call.
+unsafe fn push(
+    environment: *mut c_void,
+    status: c_int,
+    category: *const c_char,
+    message: *const c_char,
+) {
+    // SAFETY: by the caller's guarantee.
     unsafe {
         let log = &*environment.cast::<Log>();
         log.borrow_mut().push((
@@ -433,7 +447,50 @@ fn random_call_sequences_never_crash() {
             } else {
                 array.as_mut_ptr()
             };
-            match rng.random_range(0..24) {
+            match rng.random_range(0..30) {
+                24 => crate::fmi3::exports::fmi3EnterInitializationMode(
+                    c,
+                    rng.random_bool(0.5),
+                    pick_f64(&mut rng),
+                    pick_f64(&mut rng),
+                    rng.random_bool(0.5),
+                    pick_f64(&mut rng),
+                ),
+                25 => {
+                    let (mut a, mut b, mut e, mut t) = (false, false, false, 0.0);
+                    crate::fmi3::exports::fmi3DoStep(
+                        c,
+                        pick_f64(&mut rng),
+                        pick_f64(&mut rng),
+                        true,
+                        &mut a,
+                        &mut b,
+                        &mut e,
+                        &mut t,
+                    )
+                }
+                26 => crate::fmi3::exports::fmi3GetFloat64(c, &vr, 1, &mut value, 1),
+                27 => crate::fmi3::exports::fmi3SetFloat64(c, &vr, 1, &pick_f64(&mut rng), 1),
+                28 => {
+                    let mut flags = [false; 5];
+                    let mut next = 0.0;
+                    let [a, b, d, e, f] = &mut flags;
+                    crate::fmi3::exports::fmi3UpdateDiscreteStates(c, a, b, d, e, f, &mut next)
+                }
+                29 => {
+                    let mut out = [0.0; 2];
+                    crate::fmi3::exports::fmi3GetAdjointDerivative(
+                        c,
+                        &vr,
+                        1,
+                        [vr % 60, vr % 7].as_ptr(),
+                        2,
+                        &pick_f64(&mut rng),
+                        1,
+                        out.as_mut_ptr(),
+                        2,
+                    )
+                }
                 16 => fmi2EnterEventMode(c),
                 17 => fmi2EnterContinuousTimeMode(c),
                 18 => {
@@ -876,4 +933,303 @@ fn model_exchange_derivatives_are_the_models_own() {
     unit.enter_event_mode().expect("event mode");
     let info = unit.new_discrete_states().expect("event info");
     assert_eq!(info.next_event_time, None, "fig05b's reference is constant");
+}
+
+/// The FMI 3.0 logger: records like [`record`].
+unsafe extern "C" fn record3(
+    environment: *mut c_void,
+    status: c_int,
+    category: *const c_char,
+    message: *const c_char,
+) {
+    // SAFETY: as in `record`.
+    unsafe { push(environment, status, category, message) }
+}
+
+/// An FMI 3.0 instance of the misuse stage (Model Exchange or Co-Simulation).
+fn instantiate3(log: &Log, name: &str, model_exchange: bool) -> fmi2Component {
+    use crate::fmi3::exports::*;
+    let (uri, token) = resources(name);
+    let path =
+        CString::new(uri.to_str().expect("URI").trim_start_matches("file://")).expect("path");
+    let environment = std::ptr::from_ref(log).cast_mut().cast();
+    // SAFETY: valid strings; the log outlives the instance.
+    let c = unsafe {
+        if model_exchange {
+            fmi3InstantiateModelExchange(
+                c"test".as_ptr(),
+                token.as_ptr(),
+                path.as_ptr(),
+                false,
+                false,
+                environment,
+                Some(record3),
+            )
+        } else {
+            fmi3InstantiateCoSimulation(
+                c"test".as_ptr(),
+                token.as_ptr(),
+                path.as_ptr(),
+                false,
+                false,
+                false,
+                false,
+                std::ptr::null(),
+                0,
+                environment,
+                Some(record3),
+                None,
+            )
+        }
+    };
+    assert!(!c.is_null(), "instantiate: {:?}", log.borrow());
+    c
+}
+
+/// FMI 3.0 misuse: wrong states, null pointers, unknown and unsettable
+/// references, mismatched lengths, NaN, the types and features the unit
+/// leaves out; each refused with a reason naming FMI 3.0's functions, and
+/// the proper sequence works afterwards.
+#[test]
+fn fmi3_misuse_is_refused_with_a_reason() {
+    use crate::fmi3::exports::*;
+    let log = Log::default();
+    let cs = instantiate3(&log, "fmi3-cs", false);
+    let (mut event, mut terminate, mut early, mut last) = (false, false, false, 0.0);
+    // SAFETY: a live instance and local storage (or null where tested).
+    unsafe {
+        assert_eq!(
+            fmi3DoStep(
+                cs,
+                0.0,
+                1e-3,
+                true,
+                &mut event,
+                &mut terminate,
+                &mut early,
+                &mut last
+            ),
+            ERROR
+        );
+        let message = last_error(&log);
+        assert!(
+            message.contains("fmi3DoStep") && !message.contains("fmi2"),
+            "{message}"
+        );
+        assert_eq!(
+            fmi3EnterInitializationMode(cs, true, f64::NAN, 0.0, false, 0.0),
+            ERROR
+        );
+        assert_eq!(
+            fmi3EnterInitializationMode(cs, false, 0.0, 0.0, true, 5.0),
+            OK
+        );
+        assert_eq!(fmi3ExitInitializationMode(cs), OK);
+        let mut value = 0.0;
+        assert_eq!(fmi3GetFloat64(cs, &100_000, 1, &mut value, 1), ERROR);
+        assert!(last_error(&log).contains("unknown value reference 100000"));
+        assert_eq!(fmi3GetFloat64(cs, &0, 1, &mut value, 2), ERROR);
+        assert!(last_error(&log).contains("nValues = 2"));
+        assert_eq!(
+            fmi3GetFloat64(cs, std::ptr::null(), 1, &mut value, 1),
+            ERROR
+        );
+        assert!(last_error(&log).contains("null pointer"));
+        assert_eq!(fmi3SetFloat64(cs, &0, 1, &f64::NAN, 1), ERROR);
+        let mut n = 0usize;
+        assert_eq!(fmi3GetNumberOfContinuousStates(cs, &mut n), OK);
+        assert_eq!(n, 5);
+        let time = Instance::new(
+            &PathBuf::from(
+                resources("fmi3-time")
+                    .0
+                    .to_str()
+                    .expect("URI")
+                    .trim_start_matches("file://"),
+            ),
+            None,
+        )
+        .expect("instance")
+        .variables()
+        .len() as u32;
+        assert_eq!(fmi3SetFloat64(cs, &time, 1, &1.0, 1), ERROR);
+        assert!(last_error(&log).contains("independent variable"));
+        let mut integer = 0i32;
+        assert_eq!(fmi3GetInt32(cs, &0, 1, &mut integer, 1), ERROR);
+        assert!(last_error(&log).contains("no Int32 variables"));
+        assert_eq!(fmi3GetInt32(cs, std::ptr::null(), 0, &mut integer, 0), OK);
+        let mut clock = false;
+        assert_eq!(fmi3GetClock(cs, &0, 1, &mut clock), ERROR);
+        assert_eq!(fmi3GetShiftDecimal(cs, &0, 1, &mut value), ERROR);
+        assert!(last_error(&log).contains("no clocks"));
+        assert_eq!(fmi3EnterConfigurationMode(cs), ERROR);
+        assert_eq!(fmi3EnterStepMode(cs), ERROR);
+        assert_eq!(
+            fmi3DoStep(
+                cs,
+                0.0,
+                1e-3,
+                true,
+                std::ptr::null_mut(),
+                &mut terminate,
+                &mut early,
+                &mut last
+            ),
+            ERROR
+        );
+        assert_eq!(
+            fmi3GetContinuousStateDerivatives(cs, [0.0; 5].as_mut_ptr(), 5),
+            ERROR
+        );
+        assert!(last_error(&log).contains("Model Exchange function"));
+        // The proper sequence works.
+        assert_eq!(
+            fmi3DoStep(
+                cs,
+                0.0,
+                1e-3,
+                true,
+                &mut event,
+                &mut terminate,
+                &mut early,
+                &mut last
+            ),
+            OK
+        );
+        assert_eq!((event, terminate, early, last), (false, false, false, 1e-3));
+        assert_eq!(fmi3GetFloat64(cs, &time, 1, &mut value, 1), OK);
+        assert_eq!(value, 1e-3);
+        fmi3FreeInstance(cs);
+        fmi3FreeInstance(cs);
+        assert!(
+            fmi3InstantiateScheduledExecution(
+                c"x".as_ptr(),
+                c"{token}".as_ptr(),
+                c"/".as_ptr(),
+                false,
+                false,
+                std::ptr::null_mut(),
+                None,
+                None,
+                None,
+                None
+            )
+            .is_null()
+        );
+    }
+}
+
+/// FMI 3.0 Model Exchange: the adjoint derivatives are the transpose of
+/// the directional ones (both from the exact Jacobian), over states and
+/// inputs to state derivatives and outputs; the event update reports no
+/// next event for fig05b's constant reference.
+#[test]
+fn fmi3_adjoint_derivatives_are_the_transposed_directional_ones() {
+    use crate::fmi3::exports::*;
+    let log = Log::default();
+    let me = instantiate3(&log, "fmi3-me", true);
+    let (uri, _) = resources("fmi3-me-vars");
+    let variables = Instance::new(
+        &PathBuf::from(uri.to_str().expect("URI").trim_start_matches("file://")),
+        None,
+    )
+    .expect("instance")
+    .variables()
+    .to_vec();
+    let pick = |keep: &dyn Fn(&crate::variables::Binding) -> bool| -> Vec<u32> {
+        (variables.iter())
+            .filter(|v| keep(&v.binding))
+            .map(|v| v.value_reference)
+            .collect()
+    };
+    use crate::variables::Binding;
+    let unknowns = pick(&|b| matches!(b, Binding::Derivative(_) | Binding::Output(_)));
+    let knowns = pick(&|b| matches!(b, Binding::State(_) | Binding::Input(_)));
+    // SAFETY: a live instance and local arrays of the lengths given.
+    unsafe {
+        assert_eq!(
+            fmi3EnterInitializationMode(me, false, 0.0, 0.0, false, 0.0),
+            OK
+        );
+        assert_eq!(fmi3ExitInitializationMode(me), OK);
+        let flags = &mut [false; 5];
+        let mut next = 0.0;
+        let [a, b, c, d, e] = flags;
+        assert_eq!(fmi3UpdateDiscreteStates(me, a, b, c, d, e, &mut next), OK);
+        assert!(!*e, "no time event for a constant reference");
+        assert_eq!(fmi3EnterContinuousTimeMode(me), OK);
+        let mut x = [0.0; 5];
+        assert_eq!(fmi3GetContinuousStates(me, x.as_mut_ptr(), 5), OK);
+        x[0] = 3e-6;
+        x[4] = -2e-7;
+        assert_eq!(fmi3SetContinuousStates(me, x.as_ptr(), 5), OK);
+        // The Jacobian, column by column.
+        let (m, n) = (unknowns.len(), knowns.len());
+        let mut jacobian = vec![vec![0.0; n]; m];
+        let mut column = vec![0.0; m];
+        for (j, known) in knowns.iter().enumerate() {
+            assert_eq!(
+                fmi3GetDirectionalDerivative(
+                    me,
+                    unknowns.as_ptr(),
+                    m,
+                    known,
+                    1,
+                    &1.0,
+                    1,
+                    column.as_mut_ptr(),
+                    m
+                ),
+                OK,
+                "{:?}",
+                log.borrow().last()
+            );
+            for i in 0..m {
+                jacobian[i][j] = column[i];
+            }
+        }
+        let seed: Vec<f64> = (0..m).map(|i| ((i * 7 + 3) % 11) as f64 - 5.0).collect();
+        let mut adjoint = vec![0.0; n];
+        assert_eq!(
+            fmi3GetAdjointDerivative(
+                me,
+                unknowns.as_ptr(),
+                m,
+                knowns.as_ptr(),
+                n,
+                seed.as_ptr(),
+                m,
+                adjoint.as_mut_ptr(),
+                n
+            ),
+            OK
+        );
+        for j in 0..n {
+            let expected: f64 = (0..m).map(|i| seed[i] * jacobian[i][j]).sum();
+            let scale = (0..m)
+                .map(|i| (seed[i] * jacobian[i][j]).abs())
+                .sum::<f64>();
+            assert!(
+                (adjoint[j] - expected).abs() <= 1e-12 * scale.max(1e-300),
+                "known {j}: adjoint {} against {expected}",
+                adjoint[j]
+            );
+        }
+        assert!(adjoint.iter().any(|v| *v != 0.0));
+        assert_eq!(
+            fmi3GetAdjointDerivative(
+                me,
+                unknowns.as_ptr(),
+                m,
+                knowns.as_ptr(),
+                n,
+                seed.as_ptr(),
+                m - 1,
+                adjoint.as_mut_ptr(),
+                n
+            ),
+            ERROR
+        );
+        fmi3FreeInstance(me);
+    }
 }

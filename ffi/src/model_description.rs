@@ -22,7 +22,7 @@ pub struct Capabilities {
 }
 
 /// SI base-unit exponents (kg, m, s, rad) of each unit name used.
-const UNITS: [(&str, [i32; 4]); 18] = [
+pub(crate) const UNITS: [(&str, [i32; 4]); 18] = [
     ("1", [0, 0, 0, 0]),
     ("1/s", [0, 0, -1, 0]),
     ("m", [0, 1, 0, 0]),
@@ -43,7 +43,7 @@ const UNITS: [(&str, [i32; 4]); 18] = [
     ("s", [0, 0, 1, 0]),
 ];
 
-fn escape(text: &str) -> String {
+pub(crate) fn escape(text: &str) -> String {
     text.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
@@ -51,11 +51,11 @@ fn escape(text: &str) -> String {
 }
 
 /// Shortest round-trip decimal form of a start value.
-fn number(value: f64) -> String {
+pub(crate) fn number(value: f64) -> String {
     format!("{value:?}")
 }
 
-fn unit_definitions(used: &[&str]) -> String {
+pub(crate) fn unit_definitions(used: &[&str]) -> String {
     let mut xml = String::from("  <UnitDefinitions>\n");
     for (name, [kg, m, s, rad]) in UNITS.iter().filter(|(name, _)| used.contains(name)) {
         let mut base = String::new();
@@ -76,19 +76,8 @@ fn unit_definitions(used: &[&str]) -> String {
 /// One `<ScalarVariable>`; `derivative_of` is the 1-based index of the
 /// state a derivative variable differentiates.
 fn scalar_variable(variable: &Variable, derivative_of: Option<usize>) -> String {
-    let (causality, variability, initial) = match variable.causality {
-        Causality::Parameter => ("parameter", "fixed", " initial=\"exact\""),
-        Causality::Input => ("input", "continuous", ""),
-        Causality::Output => ("output", "continuous", " initial=\"calculated\""),
-        Causality::Local => ("local", "continuous", " initial=\"calculated\""),
-    };
-    let mut start = variable
-        .start
-        .map(|s| format!(" start=\"{}\"", number(s)))
-        .unwrap_or_default();
-    if let Some(state) = derivative_of {
-        start.push_str(&format!(" derivative=\"{state}\""));
-    }
+    let (causality, variability, initial) = attributes(variable.causality);
+    let start = start_and_derivative(variable, derivative_of);
     format!(
         "    <ScalarVariable name=\"{}\" valueReference=\"{}\" description=\"{}\" causality=\"{causality}\" variability=\"{variability}\"{initial}>\n      <Real unit=\"{}\"{start}/>\n    </ScalarVariable>\n",
         escape(&variable.name),
@@ -98,9 +87,35 @@ fn scalar_variable(variable: &Variable, derivative_of: Option<usize>) -> String 
     )
 }
 
+/// The causality, variability and initial attribute (with its leading
+/// space, or empty) of a variable of `causality`, in both standards.
+pub(crate) fn attributes(causality: Causality) -> (&'static str, &'static str, &'static str) {
+    match causality {
+        Causality::Parameter => ("parameter", "fixed", " initial=\"exact\""),
+        Causality::Input => ("input", "continuous", ""),
+        Causality::Output => ("output", "continuous", " initial=\"calculated\""),
+        Causality::Local => ("local", "continuous", " initial=\"calculated\""),
+    }
+}
+
+/// The ` start="..."` and ` derivative="..."` attributes (either may be absent).
+pub(crate) fn start_and_derivative(
+    variable: &Variable,
+    derivative_of: Option<impl std::fmt::Display>,
+) -> String {
+    let mut text = variable
+        .start
+        .map(|s| format!(" start=\"{}\"", number(s)))
+        .unwrap_or_default();
+    if let Some(state) = derivative_of {
+        text.push_str(&format!(" derivative=\"{state}\""));
+    }
+    text
+}
+
 /// Whether a name follows FMI's structured naming: identifiers
 /// (`[A-Za-z_][A-Za-z0-9_]*`) joined by dots, or `der(` such a name `)`.
-fn is_structured(name: &str) -> bool {
+pub(crate) fn is_structured(name: &str) -> bool {
     let name = name
         .strip_prefix("der(")
         .and_then(|inner| inner.strip_suffix(')'))
@@ -115,7 +130,7 @@ fn is_structured(name: &str) -> bool {
 }
 
 /// A 128-bit FNV-1a hash of the text, as an FMI GUID.
-fn guid(text: &str) -> String {
+pub(crate) fn guid(text: &str) -> String {
     let hash = |seed: u64| {
         text.bytes().fold(seed, |h, b| {
             (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)

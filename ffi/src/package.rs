@@ -147,8 +147,27 @@ pub fn write_resources(scenario_path: &Path, folder: &Path) -> Result<(), Packag
 
 /// The bytes of an `.fmu` for the scenario, with `library` as its binary.
 pub fn build_fmu(scenario_path: &Path, library: &Path) -> Result<Vec<u8>, PackageError> {
+    build_fmu_version(scenario_path, library, FmiVersion::Fmi2)
+}
+
+/// Which FMI standard an archive follows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FmiVersion {
+    /// FMI 2.0: `binaries/linux64/`, `fmiVersion="2.0"`.
+    #[default]
+    Fmi2,
+    /// FMI 3.0: `binaries/x86_64-linux/`, `fmiVersion="3.0"`.
+    Fmi3,
+}
+
+/// [`build_fmu`] for the FMI standard `version` (the same library serves both).
+pub fn build_fmu_version(
+    scenario_path: &Path,
+    library: &Path,
+    version: FmiVersion,
+) -> Result<Vec<u8>, PackageError> {
     let text = String::from_utf8_lossy(&read(scenario_path)?).into_owned();
-    build_fmu_from_text(&text, scenario_path, library)
+    build_fmu_from_text_version(&text, scenario_path, library, version)
 }
 
 /// [`build_fmu`] for a scenario given as text, its relative paths resolved
@@ -158,6 +177,16 @@ pub fn build_fmu_from_text(
     scenario_path: &Path,
     library: &Path,
 ) -> Result<Vec<u8>, PackageError> {
+    build_fmu_from_text_version(text, scenario_path, library, FmiVersion::Fmi2)
+}
+
+/// [`build_fmu_from_text`] for the FMI standard `version`.
+pub fn build_fmu_from_text_version(
+    text: &str,
+    scenario_path: &Path,
+    library: &Path,
+    version: FmiVersion,
+) -> Result<Vec<u8>, PackageError> {
     let resources = resource_files(scenario_path, text)?;
     let scratch = Scratch::new()?;
     for (name, bytes) in &resources {
@@ -166,13 +195,26 @@ pub fn build_fmu_from_text(
     let instance =
         Instance::new(&scratch.0, None).map_err(|e| PackageError::Resources(e.to_string()))?;
     let loaded = fistage_model::load(&scratch.0.join(SCENARIO_FILE))?;
-    let description = model_description(&loaded.model, &loaded.scenario, CAPABILITIES);
+    let (description, platform) = match version {
+        FmiVersion::Fmi2 => (
+            model_description(&loaded.model, &loaded.scenario, CAPABILITIES),
+            "linux64",
+        ),
+        FmiVersion::Fmi3 => (
+            crate::fmi3::model_description::model_description(
+                &loaded.model,
+                &loaded.scenario,
+                CAPABILITIES,
+            ),
+            "x86_64-linux",
+        ),
+    };
     debug_assert!(description.contains(instance.guid()));
     let library_bytes = library_without_debug_info(library, &scratch.0)?;
     let mut entries: Vec<(String, &[u8])> = vec![
         ("modelDescription.xml".into(), description.as_bytes()),
         (
-            format!("binaries/linux64/{MODEL_IDENTIFIER}.so"),
+            format!("binaries/{platform}/{MODEL_IDENTIFIER}.so"),
             &library_bytes,
         ),
     ];
@@ -234,7 +276,9 @@ fn library_without_debug_info(library: &Path, scratch: &Path) -> Result<Vec<u8>,
 }
 
 /// The FMI functions every packaged library must export.
-const REQUIRED_EXPORTS: [&str; 5] = [
+const REQUIRED_EXPORTS: [&str; 7] = [
+    "fmi3InstantiateCoSimulation",
+    "fmi3GetContinuousStateDerivatives",
     "fmi2GetDerivatives",
     "fmi2Instantiate",
     "fmi2DoStep",

@@ -10,6 +10,7 @@ use std::collections::HashMap;
 use std::path::Path;
 use std::process::Command;
 
+use fistage_fmi::FmiVersion;
 use fistage_sim::run_scenario;
 
 /// `fistage run` of a shipped scenario, shortened to `duration`: signal name -> samples.
@@ -61,8 +62,25 @@ fn simulate_and_compare(
     outputs: &[&str],
     (interface, relative): (&str, f64),
 ) {
-    let folder = support::scratch(&format!("{name}-{interface}"));
-    let fmu = support::fmu(scenario, &folder);
+    simulate_and_compare_version(
+        scenario,
+        name,
+        stop,
+        outputs,
+        (interface, relative, FmiVersion::Fmi2),
+    );
+}
+
+/// [`simulate_and_compare`] for an FMU of the FMI standard `version`.
+fn simulate_and_compare_version(
+    scenario: &str,
+    name: &str,
+    stop: f64,
+    outputs: &[&str],
+    (interface, relative, version): (&str, f64, FmiVersion),
+) {
+    let folder = support::scratch(&format!("{name}-{interface}-{version:?}"));
+    let fmu = support::fmu_version(scenario, &folder, version);
     let n_variables = validate(&fmu);
     assert!(n_variables > outputs.len());
     let csv = folder.join("fmpy.csv");
@@ -83,7 +101,7 @@ fn simulate_and_compare(
         let scale = peak_to_peak(reference).max(1e-12);
         let difference = max_difference(&fmpy, reference);
         println!(
-            "{name} {interface} {output}: max |FMPy - native| = {difference:.3e} (p2p {scale:.3e})"
+            "{name} {version:?} {interface} {output}: max |FMPy - native| = {difference:.3e} (p2p {scale:.3e})"
         );
         assert!(
             difference <= relative * scale,
@@ -146,6 +164,42 @@ fn six_dof_stage_validates_and_simulates_like_fistage_run() {
         ],
         ("CoSimulation", 1e-4),
     );
+}
+
+/// FMI 3.0, both interfaces: FMPy validates the FMU and simulates Fig. 5b
+/// through its Co-Simulation and, with CVode, its Model Exchange like the
+/// native run.
+#[test]
+fn fig05b_fi_fmi3_in_both_interfaces_matches_fistage_run() {
+    if !support::fmpy_available("fig05b_fi_fmi3_in_both_interfaces_matches_fistage_run") {
+        return;
+    }
+    for (interface, relative) in [("CoSimulation", 1e-4), ("ModelExchange", 1e-3)] {
+        simulate_and_compare_version(
+            "scenarios/paper/fig05b_fi.toml",
+            "fig05b_fi",
+            5.0,
+            &["encoder.position", "bearing_x.q", "bearing_friction.force"],
+            (interface, relative, FmiVersion::Fmi3),
+        );
+    }
+}
+
+/// FMI 3.0 on the four-bearing 6-DOF traverse, both interfaces.
+#[test]
+fn six_dof_stage_fmi3_in_both_interfaces_matches_fistage_run() {
+    if !support::fmpy_available("six_dof_stage_fmi3_in_both_interfaces_matches_fistage_run") {
+        return;
+    }
+    for (interface, relative) in [("CoSimulation", 1e-4), ("ModelExchange", 1e-3)] {
+        simulate_and_compare_version(
+            "scenarios/coupling/friction20_traverse.toml",
+            "friction20_traverse",
+            0.5,
+            &["table.x", "table.yaw", "friction_rr.force"],
+            (interface, relative, FmiVersion::Fmi3),
+        );
+    }
 }
 
 /// Model Exchange on the four-bearing 6-DOF table: CVode integrates the
@@ -399,11 +453,22 @@ fn fmutool_check_finds_nothing() {
         return;
     }
     let folder = support::scratch("fmutool");
-    for scenario in [
-        "scenarios/paper/fig05b_fi.toml",
-        "scenarios/coupling/symmetric_traverse.toml",
-    ] {
-        let fmu = support::fmu(scenario, &folder);
+    let cases = [
+        ("scenarios/paper/fig05b_fi.toml", FmiVersion::Fmi2, "2.0"),
+        (
+            "scenarios/coupling/symmetric_traverse.toml",
+            FmiVersion::Fmi2,
+            "2.0",
+        ),
+        ("scenarios/paper/fig05b_fi.toml", FmiVersion::Fmi3, "3.0"),
+        (
+            "scenarios/coupling/symmetric_traverse.toml",
+            FmiVersion::Fmi3,
+            "3.0",
+        ),
+    ];
+    for (scenario, version, standard) in cases {
+        let fmu = support::fmu_version(scenario, &folder, version);
         let fmutool = support::python().with_file_name("fmutool");
         let output = Command::new(&fmutool)
             .arg("-input")
@@ -417,7 +482,10 @@ fn fmutool_check_finds_nothing() {
             String::from_utf8_lossy(&output.stderr)
         );
         assert!(output.status.success(), "fmutool failed:\n{text}");
-        assert!(text.contains("compliant with FMI-2.0"), "{text}");
+        assert!(
+            text.contains(&format!("compliant with FMI-{standard}")),
+            "{text}"
+        );
         assert!(text.contains("No semantic error"), "{text}");
         assert!(
             !text

@@ -1,24 +1,26 @@
-//! The checked-in C header `include/fistage_stage.h` is what cbindgen makes
-//! of the code now. To refresh it after changing an exported function, run
-//! this test with `FISTAGE_BLESS=1`.
+//! The checked-in C headers `include/fistage_stage.h` (FMI 2.0) and
+//! `include/fistage_stage_fmi3.h` (FMI 3.0) are what cbindgen makes of the
+//! code now. To refresh them after changing an exported function, run these
+//! tests with `FISTAGE_BLESS=1`.
 
 use std::path::Path;
 
-#[test]
-fn checked_in_header_matches_the_code() {
+/// The header cbindgen generates from `sources` with `config`, compared
+/// with (or, blessed, written to) `include/<header>`.
+fn generated_header(config: &str, sources: &[&str], header: &str) -> String {
     let crate_dir = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let config =
-        cbindgen::Config::from_file(crate_dir.join("cbindgen.toml")).expect("cbindgen.toml");
+    let config = cbindgen::Config::from_file(crate_dir.join(config)).expect("cbindgen config");
+    let mut builder = cbindgen::Builder::new().with_config(config);
+    for source in sources {
+        builder = builder.with_src(crate_dir.join(source));
+    }
     let mut generated = Vec::new();
-    cbindgen::Builder::new()
-        .with_config(config)
-        .with_src(crate_dir.join("src/types.rs"))
-        .with_src(crate_dir.join("src/exports.rs"))
+    builder
         .generate()
         .expect("cbindgen parses the exports")
         .write(&mut generated);
     let generated = String::from_utf8(generated).expect("UTF-8 header");
-    let path = crate_dir.join("include/fistage_stage.h");
+    let path = crate_dir.join("include").join(header);
     if std::env::var_os("FISTAGE_BLESS").is_some() {
         std::fs::write(&path, &generated).expect("write header");
     }
@@ -27,6 +29,16 @@ fn checked_in_header_matches_the_code() {
         checked_in == generated,
         "{} is stale: rerun this test with FISTAGE_BLESS=1 and commit the header",
         path.display()
+    );
+    generated
+}
+
+#[test]
+fn checked_in_header_matches_the_code() {
+    let generated = generated_header(
+        "cbindgen.toml",
+        &["src/types.rs", "src/exports.rs"],
+        "fistage_stage.h",
     );
     let functions = generated.matches("fmi2Status fmi2").count()
         + generated.matches("fmi2Component fmi2Instantiate(").count()
@@ -37,3 +49,30 @@ fn checked_in_header_matches_the_code() {
         "the header declares every FMI 2.0 ME and CS function once"
     );
 }
+
+#[test]
+fn checked_in_fmi3_header_matches_the_code() {
+    let generated = generated_header(
+        "cbindgen_fmi3.toml",
+        &["src/fmi3/types.rs", "src/fmi3/exports.rs"],
+        "fistage_stage_fmi3.h",
+    );
+    let declarations: Vec<&str> = generated
+        .lines()
+        .filter(|l| {
+            l.starts_with("fmi3") || l.starts_with("const char *fmi3") || l.starts_with("void fmi3")
+        })
+        .collect();
+    let declared = declarations.len();
+    assert!(
+        declarations.iter().all(|l| !l.contains("fmi2")),
+        "the FMI 3.0 header declares FMI 2.0 types"
+    );
+    assert_eq!(
+        declared, FMI3_FUNCTIONS,
+        "the FMI 3.0 header declares each of the standard's {FMI3_FUNCTIONS} functions once"
+    );
+}
+
+/// The FMI 3.0 standard's functions.
+const FMI3_FUNCTIONS: usize = 75;

@@ -184,3 +184,67 @@ fn guid_is_stable_and_follows_the_model() {
     ));
     assert_ne!(first, changed, "c = 10 and c = 100 must not share a GUID");
 }
+
+/// The FMI 3.0 description: one independent `time`, unique value
+/// references, each derivative naming its state by value reference, every
+/// derivative in the model structure, and the FMI 2.0 GUID of the same
+/// model as the instantiation token.
+#[test]
+fn fmi3_description_is_consistent() {
+    for scenario in [
+        "scenarios/paper/fig05b_fi.toml",
+        "scenarios/coupling/friction20_traverse.toml",
+    ] {
+        let loaded = load(scenario);
+        let xml = fistage_fmi::fmi3::model_description::model_description(
+            &loaded.model,
+            &loaded.scenario,
+            CAPABILITIES,
+        );
+        let document = roxmltree::Document::parse(&xml).expect("well-formed XML");
+        let root = document.root_element();
+        assert_eq!(root.attribute("fmiVersion"), Some("3.0"));
+        let fmi2 = model_description(&loaded.model, &loaded.scenario, CAPABILITIES);
+        let token = root.attribute("instantiationToken").expect("token");
+        assert!(fmi2.contains(&format!("guid=\"{token}\"")), "{scenario}");
+        let variables: Vec<roxmltree::Node> = root
+            .descendants()
+            .filter(|n| n.has_tag_name("Float64"))
+            .collect();
+        let by_reference: std::collections::HashMap<&str, &str> = variables
+            .iter()
+            .map(|v| {
+                (
+                    v.attribute("valueReference").expect("vr"),
+                    v.attribute("name").expect("name"),
+                )
+            })
+            .collect();
+        assert_eq!(
+            by_reference.len(),
+            variables.len(),
+            "{scenario}: a reference twice"
+        );
+        let independent: Vec<_> = variables
+            .iter()
+            .filter(|v| v.attribute("causality") == Some("independent"))
+            .collect();
+        assert_eq!(independent.len(), 1);
+        assert_eq!(independent[0].attribute("name"), Some("time"));
+        let mut derivatives = Vec::new();
+        for v in &variables {
+            if let Some(of) = v.attribute("derivative") {
+                let state = by_reference[of];
+                assert_eq!(v.attribute("name"), Some(format!("der({state})").as_str()));
+                derivatives.push(v.attribute("valueReference").expect("vr"));
+            }
+        }
+        assert_eq!(derivatives.len(), loaded.model.n_states());
+        let listed: Vec<&str> = root
+            .descendants()
+            .filter(|n| n.has_tag_name("ContinuousStateDerivative"))
+            .filter_map(|n| n.attribute("valueReference"))
+            .collect();
+        assert_eq!(listed, derivatives, "{scenario}");
+    }
+}

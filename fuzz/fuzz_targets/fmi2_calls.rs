@@ -1,5 +1,6 @@
 //! Any bytes as a sequence of fmi2 calls on up to two instances (each Model
-//! Exchange or Co-Simulation, the functions of both called on either): calls in and
+//! Exchange or Co-Simulation, the functions of both and FMI 3.0's called on
+//! either): calls in and
 //! out of order, on freed or null instances, with awkward arguments (NaN,
 //! infinities, negative steps, unknown value references, damaged serialized
 //! states). Every call returns a status of the standard's set, never
@@ -61,7 +62,7 @@ impl Session {
 
     /// One call chosen by the next byte; returns its name and status.
     fn call(&mut self, bytes: &mut Bytes) -> Option<(&'static str, i32, bool)> {
-        let op = bytes.u8() % 30;
+        let op = bytes.u8() % 34;
         if op == 19 {
             if self.units.len() < 2 {
                 self.units
@@ -174,6 +175,7 @@ impl Session {
                     )
                 }
                 20..=28 => self.model_exchange_call(op, bytes, c),
+                29..=32 => fmi3_call(op, bytes, c, vr),
                 _ => {
                     fmi2FreeInstance(c);
                     if let Some(i) = self.index_of(c) {
@@ -311,6 +313,52 @@ fuzz_target!(|data: &[u8]| {
         }
     }
 });
+
+/// One FMI 3.0 call (`op` 29 to 32) on an instance of either interface.
+///
+/// # Safety
+/// `c` is null or an instance of this session (live or freed).
+unsafe fn fmi3_call(op: u8, bytes: &mut Bytes, c: fmi2Component, vr: u32) -> (&'static str, i32) {
+    use fistage_fmi::fmi3::exports::*;
+    let mut value = 0.0;
+    // SAFETY: local storage for every output; `c` by the caller's guarantee.
+    unsafe {
+        match op {
+            29 => (
+                "fmi3EnterInitializationMode",
+                fmi3EnterInitializationMode(
+                    c,
+                    bytes.u8() % 2 == 0,
+                    bytes.real(),
+                    bytes.real(),
+                    bytes.u8() % 2 == 0,
+                    bytes.real(),
+                ),
+            ),
+            30 => {
+                let (mut a, mut b, mut e, mut t) = (false, false, false, 0.0);
+                let h = f64::from(bytes.u8()) * 1e-4;
+                let point = if bytes.u8() < 220 { 0.0 } else { bytes.real() };
+                (
+                    "fmi3DoStep",
+                    fmi3DoStep(c, point, h.min(MAX_STEP), true, &mut a, &mut b, &mut e, &mut t),
+                )
+            }
+            31 => (
+                "fmi3GetFloat64",
+                fmi3GetFloat64(c, &vr, 1, &mut value, usize::from(bytes.u8() % 3)),
+            ),
+            _ => {
+                let mut flags = [false; 5];
+                let [a, b, d, e, f] = &mut flags;
+                (
+                    "fmi3UpdateDiscreteStates",
+                    fmi3UpdateDiscreteStates(c, a, b, d, e, f, &mut value),
+                )
+            }
+        }
+    }
+}
 
 /// The fuzzer's bytes as a stream of arguments; zeros once they run out.
 struct Bytes<'a>(pub &'a [u8]);

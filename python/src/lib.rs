@@ -273,14 +273,29 @@ impl Scenario {
         studies::robust(py, &loaded, &robot, samples, seed, threads, progress)
     }
 
-    /// export_fmu(path, library=None) -> path: the scenario as an FMI 2.0
-    /// Co-Simulation FMU, as `fistage fmu` packages it. The FMU's shared
+    /// export_fmu(path, library=None, fmi_version=2) -> path: the scenario
+    /// as an FMI 2.0 (or 3.0) FMU with Model Exchange and Co-Simulation, as
+    /// `fistage fmu` packages it. The FMU's shared
     /// library is `library`, else the one built with this package.
     /// Overrides set from Python are not in the scenario's text, so a
     /// scenario with overrides is refused: an importer sets the FMU's
     /// parameters itself.
-    #[pyo3(signature = (path, library=None))]
-    fn export_fmu(&self, path: PathBuf, library: Option<PathBuf>) -> PyResult<PathBuf> {
+    #[pyo3(signature = (path, library=None, fmi_version=2))]
+    fn export_fmu(
+        &self,
+        path: PathBuf,
+        library: Option<PathBuf>,
+        fmi_version: u8,
+    ) -> PyResult<PathBuf> {
+        let version = match fmi_version {
+            2 => fistage_fmi::FmiVersion::Fmi2,
+            3 => fistage_fmi::FmiVersion::Fmi3,
+            other => {
+                return Err(Error::new_err(format!(
+                    "fmi_version must be 2 or 3, got {other}"
+                )));
+            }
+        };
         if !self.overrides.is_empty() {
             return Err(Error::new_err(format!(
                 "export_fmu packages the scenario's text; its {} Python overrides would be \
@@ -289,7 +304,7 @@ impl Scenario {
                 self.overrides.len()
             )));
         }
-        studies::export_fmu(&self.text, &self.file, &path, library)
+        studies::export_fmu(&self.text, &self.file, &path, library, version)
     }
 
     /// The scenario's title.

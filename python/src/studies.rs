@@ -107,14 +107,15 @@ impl Drop for TemporaryFile {
     }
 }
 
-/// Packages the scenario (its text, its robot) as an FMI 2.0
-/// Co-Simulation FMU at `path`, with `library` as its binary or the one
-/// built with this package.
+/// Packages the scenario (its text, its robot) as an FMU of the FMI
+/// standard `version` (Model Exchange and Co-Simulation) at `path`, with
+/// `library` as its binary or the one built with this package.
 pub fn export_fmu(
     text: &str,
     file: &Path,
     path: &Path,
     library: Option<PathBuf>,
+    version: fistage_fmi::FmiVersion,
 ) -> PyResult<PathBuf> {
     let (_temporary, library) = match library {
         Some(given) if given.is_file() => (None, given),
@@ -135,7 +136,7 @@ pub fn export_fmu(
             (Some(TemporaryFile(file.clone())), file)
         }
     };
-    let bytes = fistage_fmi::build_fmu_from_text(text, file, &library)
+    let bytes = fistage_fmi::build_fmu_from_text_version(text, file, &library, version)
         .map_err(|e| Error::new_err(e.to_string()))?;
     std::fs::write(path, bytes)
         .map_err(|e| Error::new_err(format!("{}: cannot write: {e}", path.display())))?;

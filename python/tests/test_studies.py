@@ -59,6 +59,15 @@ def test_export_fmu_packages_the_scenario(root, tmp_path):
     assert "modelDescription.xml" in names
     assert any(n.startswith("binaries/linux64/") and n.endswith(".so") for n in names)
     assert "servo_force" in description and 'fmiVersion="2.0"' in description
+    assert "<ModelExchange" in description and "<CoSimulation" in description
+    path3 = scenario.export_fmu(tmp_path / "stage3.fmu", fmi_version=3)
+    with zipfile.ZipFile(path3) as fmu:
+        names = fmu.namelist()
+        description = fmu.read("modelDescription.xml").decode()
+    assert any(n.startswith("binaries/x86_64-linux/") and n.endswith(".so") for n in names)
+    assert 'fmiVersion="3.0"' in description and 'causality="independent"' in description
+    with pytest.raises(fistage.Error, match="fmi_version must be 2 or 3"):
+        scenario.export_fmu(tmp_path / "x.fmu", fmi_version=1)
     with pytest.raises(fistage.Error, match="overrides"):
         scenario.with_overrides({"controller.c": 10.0}).export_fmu(tmp_path / "other.fmu")
     with pytest.raises(fistage.Error, match="not found"):

@@ -1,5 +1,6 @@
-//! `fistage fmu SCENARIO -o stage.fmu`: package the scenario as an FMI 2.0
-//! Co-Simulation FMU (model description, shared library, resources).
+//! `fistage fmu SCENARIO -o stage.fmu [--fmi-version 2|3]`: package the
+//! scenario as an FMU with Model Exchange and Co-Simulation (model
+//! description, shared library, resources), FMI 2.0 or 3.0.
 
 use std::path::PathBuf;
 
@@ -18,6 +19,9 @@ pub struct FmuArgs {
     /// as `cargo build -p fistage-fmi` places it).
     #[arg(long = "library")]
     pub shared_object: Option<PathBuf>,
+    /// The FMI standard: 2 (2.0) or 3 (3.0).
+    #[arg(long = "fmi-version", default_value = "2", value_parser = ["2", "3"])]
+    pub fmi_version: String,
 }
 
 fn find_library(args: &FmuArgs) -> anyhow::Result<PathBuf> {
@@ -48,7 +52,11 @@ fn find_library(args: &FmuArgs) -> anyhow::Result<PathBuf> {
 /// Runs the command.
 pub fn run(args: &FmuArgs) -> anyhow::Result<()> {
     let library = find_library(args)?;
-    let bytes = fistage_fmi::build_fmu(&args.scenario, &library)?;
+    let version = match args.fmi_version.as_str() {
+        "3" => fistage_fmi::FmiVersion::Fmi3,
+        _ => fistage_fmi::FmiVersion::Fmi2,
+    };
+    let bytes = fistage_fmi::build_fmu_version(&args.scenario, &library, version)?;
     if let Some(folder) = args.output.parent()
         && !folder.as_os_str().is_empty()
     {
@@ -58,8 +66,9 @@ pub fn run(args: &FmuArgs) -> anyhow::Result<()> {
     std::fs::write(&args.output, &bytes)
         .with_context(|| format!("cannot write {}", args.output.display()))?;
     println!(
-        "{}: FMI 2.0 Co-Simulation FMU, {:.1} MB (library {})",
+        "{}: FMI {}.0 FMU (Model Exchange and Co-Simulation), {:.1} MB (library {})",
         args.output.display(),
+        args.fmi_version,
         bytes.len() as f64 / 1e6,
         library.display()
     );

@@ -454,6 +454,25 @@ fn fmu_packages_a_scenario() {
     ] {
         assert!(text.contains(entry), "{entry} in the archive");
     }
+    let fmu3 = out.join("stage3.fmu");
+    let result = fistage()
+        .arg("fmu")
+        .arg(repository().join("scenarios/coupling/symmetric_traverse.toml"))
+        .args(["--fmi-version", "3", "-o"])
+        .arg(&fmu3)
+        .output()
+        .expect("fistage runs");
+    assert!(result.status.success());
+    assert!(String::from_utf8_lossy(&result.stdout).contains("FMI 3.0 FMU"));
+    let text = String::from_utf8_lossy(&std::fs::read(&fmu3).expect("FMU written")).into_owned();
+    assert!(text.contains("binaries/x86_64-linux/fistage_stage.so"));
+    let refused = fistage()
+        .arg("fmu")
+        .arg(repository().join("scenarios/coupling/symmetric_traverse.toml"))
+        .args(["--fmi-version", "4"])
+        .output()
+        .expect("fistage runs");
+    assert!(!refused.status.success());
     let missing = fistage()
         .arg("fmu")
         .arg(repository().join("scenarios/coupling/symmetric_traverse.toml"))

@@ -69,9 +69,15 @@ pub fn scratch(name: &str) -> PathBuf {
     dir
 }
 
-/// Builds the FMU of a shipped scenario into `folder`.
+/// Builds the FMI 2.0 FMU of a shipped scenario into `folder`.
 pub fn fmu(scenario: &str, folder: &Path) -> PathBuf {
-    let bytes = fistage_fmi::build_fmu(&root().join(scenario), &library()).expect("build FMU");
+    fmu_version(scenario, folder, fistage_fmi::FmiVersion::Fmi2)
+}
+
+/// Builds the FMU of a shipped scenario for the FMI standard `version` into `folder`.
+pub fn fmu_version(scenario: &str, folder: &Path, version: fistage_fmi::FmiVersion) -> PathBuf {
+    let bytes = fistage_fmi::build_fmu_version(&root().join(scenario), &library(), version)
+        .expect("build FMU");
     let stem = Path::new(scenario)
         .file_stem()
         .and_then(|s| s.to_str())
