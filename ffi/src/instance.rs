@@ -926,17 +926,34 @@ impl Instance {
         Ok(())
     }
 
-    /// fmi2SetTime (Model Exchange).
+    /// fmi2SetTime (Model Exchange). Before initialisation ends it sets the
+    /// start time, as importers that follow the standard's example code
+    /// call it right after instantiation (fmi2SetupExperiment, if it comes
+    /// later, has the last word).
     pub fn set_time(&mut self, t: f64) -> Result<(), CallError> {
         self.require_interface("fmi2SetTime", Interface::ModelExchange)?;
-        self.require("fmi2SetTime", &[Phase::EventMode, Phase::ContinuousTime])?;
+        self.require(
+            "fmi2SetTime",
+            &[
+                Phase::Instantiated,
+                Phase::Initialization,
+                Phase::EventMode,
+                Phase::ContinuousTime,
+            ],
+        )?;
         if !t.is_finite() {
             return Err(CallError::InvalidArgument(format!(
                 "time must be finite, got {t}"
             )));
         }
-        if let Some(c) = self.continuous.as_mut() {
-            c.t = t;
+        match self.continuous.as_mut() {
+            Some(c) => c.t = t,
+            None => {
+                check_experiment(self.tolerance, t, self.stop_time)
+                    .map_err(CallError::InvalidArgument)?;
+                self.start_time = t;
+                self.initial = None;
+            }
         }
         self.outputs_valid = false;
         Ok(())
