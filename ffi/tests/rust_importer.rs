@@ -8,8 +8,28 @@ use std::collections::HashMap;
 
 use fmu_runner::{Fmu, FmuInstance, fmi2Type};
 
-/// Runs the FMU in fmu-runner with 1 ms steps; rows of (time, outputs...).
-fn run_in_fmu_runner(fmu: &std::path::Path, outputs: &[&str], stop: f64) -> Vec<Vec<f64>> {
+/// The `DefaultExperiment` tolerance of a shipped scenario's description,
+/// which FMPy passes to fmi2SetupExperiment.
+fn default_tolerance(scenario: &str) -> f64 {
+    let loaded = fistage_model::load(&support::root().join(scenario)).expect("scenario");
+    let capabilities = fistage_fmi::CAPABILITIES;
+    let xml = fistage_fmi::model_description(&loaded.model, &loaded.scenario, capabilities);
+    let document = roxmltree::Document::parse(&xml).expect("XML");
+    (document.descendants())
+        .find(|n| n.has_tag_name("DefaultExperiment"))
+        .and_then(|n| n.attribute("tolerance"))
+        .and_then(|t| t.parse().ok())
+        .expect("a default tolerance")
+}
+
+/// Runs the FMU in fmu-runner with 1 ms steps at `tolerance`, as FMPy does;
+/// rows of (time, outputs...).
+fn run_in_fmu_runner(
+    fmu: &std::path::Path,
+    outputs: &[&str],
+    stop: f64,
+    tolerance: f64,
+) -> Vec<Vec<f64>> {
     let library = Fmu::unpack(fmu)
         .expect("fmu-runner unpacks the FMU")
         .load(fmi2Type::fmi2CoSimulation)
@@ -21,7 +41,7 @@ fn run_in_fmu_runner(fmu: &std::path::Path, outputs: &[&str], stop: f64) -> Vec<
         .map(|name| variables.get(*name).expect("variable in the description"))
         .collect();
     instance
-        .setup_experiment(0.0, None, None)
+        .setup_experiment(0.0, None, Some(tolerance))
         .expect("fmi2SetupExperiment");
     instance
         .enter_initialization_mode()
@@ -76,7 +96,7 @@ fn fmu_runner_and_fmpy_agree() {
         let csv = folder.join("fmpy.csv");
         support::fmpy_simulate(&fmu, &csv, stop, &outputs);
         let (names, fmpy_rows) = support::read_csv(&csv);
-        let rust_rows = run_in_fmu_runner(&fmu, &outputs, stop);
+        let rust_rows = run_in_fmu_runner(&fmu, &outputs, stop, default_tolerance(scenario));
         assert_eq!(fmpy_rows.len(), rust_rows.len(), "{name}: same samples");
         for (j, output) in outputs.iter().enumerate() {
             let column = names.iter().position(|n| n == output).expect("FMPy column");

@@ -9,7 +9,7 @@
 use fistage_model::{Model, Scenario};
 
 use crate::model_description::{
-    Capabilities, MODEL_IDENTIFIER, attributes, escape, is_structured,
+    Capabilities, MODEL_IDENTIFIER, attributes, default_tolerance, escape, is_structured,
     model_description as fmi2_description, number, start_and_derivative, unit_definitions,
 };
 use crate::variables::{Binding, Causality, Variable, variables};
@@ -60,7 +60,7 @@ pub fn model_description(model: &Model, scenario: &Scenario, capabilities: Capab
     xml.push_str(&format!(
         "  <DefaultExperiment startTime=\"0.0\" stopTime=\"{}\" tolerance=\"{}\" stepSize=\"{}\"/>\n",
         number(scenario.duration),
-        number(scenario.solver.rtol),
+        number(default_tolerance(scenario)),
         number(1.0 / scenario.sample_rate)
     ));
     xml.push_str("  <ModelVariables>\n");

@@ -47,11 +47,12 @@ def command_validate(args):
 
 def command_simulate(args):
     outputs = args.outputs.split(",")
-    extra = {}
+    # The native run's tolerance, in the unit (Co-Simulation) or in FMPy's
+    # own CVode (BDF), which integrates the states from the unit's
+    # derivatives and time events (Model Exchange).
+    extra = {"relative_tolerance": args.rtol}
     if args.interface == "ModelExchange":
-        # FMPy's own CVode (BDF) integrates the states; the unit gives the
-        # derivatives and the time events.
-        extra = {"solver": "CVode", "relative_tolerance": args.rtol}
+        extra["solver"] = "CVode"
     result = fmpy.simulate_fmu(
         args.fmu,
         stop_time=args.stop,
@@ -66,6 +67,19 @@ def command_simulate(args):
         out.write(",".join(names) + "\n")
         for row in result:
             out.write(",".join(repr(float(row[name])) for name in names) + "\n")
+
+
+def command_defaults(args):
+    """simulate_fmu with nothing but the interface: FMPy's defaults and the
+    description's default experiment. Prints the encoder's peak to peak
+    from `--from` seconds on, in m, per interface."""
+    import numpy as np
+    out = {}
+    for interface in ("CoSimulation", "ModelExchange"):
+        result = fmpy.simulate_fmu(args.fmu, fmi_type=interface, validate=True)
+        window = result["time"] >= args.start
+        out[interface] = float(np.ptp(result["encoder.position"][window]))
+    print(json.dumps(out))
 
 
 def command_external(args):
@@ -271,6 +285,9 @@ def main():
     p.add_argument("--outputs", required=True)
     p.add_argument("--interface", default="CoSimulation", choices=["CoSimulation", "ModelExchange"])
     p.add_argument("--rtol", type=float, default=1e-8)
+    p = sub.add_parser("defaults")
+    p.add_argument("fmu")
+    p.add_argument("--from", dest="start", type=float, required=True)
     p = sub.add_parser("external")
     p.add_argument("fmu")
     p.add_argument("csv")
@@ -302,6 +319,7 @@ def main():
         "validate": command_validate,
         "simulate": command_simulate,
         "external": command_external,
+        "defaults": command_defaults,
         "loop": command_loop,
         "rollback": command_rollback,
         "derivatives": command_derivatives,
