@@ -12,7 +12,8 @@
 //!   [`RecordOptions::horizon`]).
 //! * The start is [`super::start::estimate_start`] (nothing is asked of the
 //!   user), refined by the best of a few presliding variants, since sigma0
-//!   and sigma1 are the least certain first estimates.
+//!   and sigma1 are the least certain first estimates, and by a grid of
+//!   Stribeck curves where the record gave no Stribeck drop or no sigma2.
 //! * Loss L2, or Huber's with its threshold at 1.345 robust scales.
 //! * Intervals: the residuals of a record are correlated (quantisation,
 //!   unmeasured forces), so Jacobian-only intervals come out far too narrow
@@ -280,7 +281,7 @@ pub fn fit_record(
     let refined_start = if options.start.is_some() {
         first
     } else {
-        short(&horizons[0]).best_variant(first)?
+        short(&horizons[0]).best_variant(first, &start.ruled)?
     };
     let (mut theta, mut iterations, mut rhs_evaluations) = (refined_start, 0, 0);
     for samples in &horizons {
@@ -447,20 +448,56 @@ impl Problem<'_> {
     }
 
     /// The start among presliding variants (sigma0 x {1/2, 1, 2}, sigma1 x
-    /// {1/3, 1, 3}) with the least L2 misfit.
-    fn best_variant(&self, theta: Theta) -> Result<Theta> {
+    /// {1/3, 1, 3}) with the least L2 misfit; then, where the record gave
+    /// no Stribeck drop (f_S = f_C) or no sigma2 (no steady sliding, as in
+    /// a servo's sine tracking, where the bristles lag the velocity), among
+    /// a grid of Stribeck curves (f_S / f_C x v_s over the record's speeds)
+    /// and sigma2 values: a rule's value is no start.
+    fn best_variant(&self, theta: Theta, ruled: &[RecordParam]) -> Result<Theta> {
         let mut best = (f64::INFINITY, theta);
+        let consider = |t: Theta, best: &mut (f64, Theta)| {
+            if let Ok(m) = self.misfit(&t, false, f64::INFINITY)
+                && m.cost.is_finite()
+                && m.cost < best.0
+            {
+                *best = (m.cost, t);
+            }
+        };
         for s0 in [1.0, 0.5, 2.0] {
             for s1 in [1.0, 1.0 / 3.0, 3.0] {
                 let mut t = theta;
                 t.0[RecordParam::Sigma0.index()] *= s0;
                 t.0[RecordParam::Sigma1.index()] *= s1;
-                let cost = match self.misfit(&t, false, f64::INFINITY) {
-                    Ok(m) if m.cost.is_finite() => m.cost,
-                    _ => continue,
-                };
-                if cost < best.0 {
-                    best = (cost, t);
+                consider(t, &mut best);
+            }
+        }
+        let (fc, fs, vs, s2) = (
+            RecordParam::FC.index(),
+            RecordParam::FS.index(),
+            RecordParam::VS.index(),
+            RecordParam::Sigma2.index(),
+        );
+        let no_drop = theta.0[fs] <= 1.06 * theta.0[fc];
+        if !(no_drop || ruled.contains(&RecordParam::Sigma2)) {
+            return Ok(best.1);
+        }
+        let center = best.1;
+        let critical = 2.0 * (center.0[RecordParam::Sigma0.index()] * center.mass()).sqrt();
+        let top_speed = derivatives(self.record)
+            .velocity
+            .iter()
+            .filter(|v| v.is_finite())
+            .fold(0.0f64, |m, v| m.max(v.abs()));
+        let level = 0.5 * (center.0[fc] + center.0[fs]);
+        for ratio in [1.1, 1.3, 1.6] {
+            for k in 0..5 {
+                for damping in [1e-3, 1e-2] {
+                    let mut t = center;
+                    t.0[fc] = level / (0.5 * (1.0 + ratio));
+                    t.0[fs] = ratio * t.0[fc];
+                    t.0[vs] = top_speed * 0.03 * 2f64.powi(k);
+                    t.0[s2] = damping * critical;
+                    consider(t, &mut best);
                 }
             }
         }
