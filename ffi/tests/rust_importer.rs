@@ -8,21 +8,7 @@ use std::collections::HashMap;
 
 use fmu_runner::{Fmu, FmuInstance, fmi2Type};
 
-/// The `DefaultExperiment` tolerance of a shipped scenario's description,
-/// which FMPy passes to fmi2SetupExperiment.
-fn default_tolerance(scenario: &str) -> f64 {
-    let loaded = fistage_model::load(&support::root().join(scenario)).expect("scenario");
-    let capabilities = fistage_fmi::CAPABILITIES;
-    let xml = fistage_fmi::model_description(&loaded.model, &loaded.scenario, capabilities);
-    let document = roxmltree::Document::parse(&xml).expect("XML");
-    (document.descendants())
-        .find(|n| n.has_tag_name("DefaultExperiment"))
-        .and_then(|n| n.attribute("tolerance"))
-        .and_then(|t| t.parse().ok())
-        .expect("a default tolerance")
-}
-
-/// Runs the FMU in fmu-runner with 1 ms steps at `tolerance`, as FMPy does;
+/// Runs the FMU in fmu-runner with 1 ms steps at `tolerance`, as FMPy is asked to;
 /// rows of (time, outputs...).
 fn run_in_fmu_runner(
     fmu: &std::path::Path,
@@ -96,7 +82,7 @@ fn fmu_runner_and_fmpy_agree() {
         let csv = folder.join("fmpy.csv");
         support::fmpy_simulate(&fmu, &csv, stop, &outputs);
         let (names, fmpy_rows) = support::read_csv(&csv);
-        let rust_rows = run_in_fmu_runner(&fmu, &outputs, stop, default_tolerance(scenario));
+        let rust_rows = run_in_fmu_runner(&fmu, &outputs, stop, support::SIMULATION_RTOL);
         assert_eq!(fmpy_rows.len(), rust_rows.len(), "{name}: same samples");
         for (j, output) in outputs.iter().enumerate() {
             let column = names.iter().position(|n| n == output).expect("FMPy column");

@@ -108,8 +108,12 @@ pub fn fmpy_simulate(fmu: &Path, csv: &Path, stop: f64, outputs: &[&str]) {
     fmpy_simulate_as(fmu, csv, stop, outputs, "CoSimulation");
 }
 
+/// The relative tolerance the FMPy simulations ask for: the shipped
+/// scenarios' own, so that they can be compared with the native run.
+pub const SIMULATION_RTOL: f64 = 1e-8;
+
 /// [`fmpy_simulate`] through `interface` (`CoSimulation`, or
-/// `ModelExchange` with FMPy's CVode).
+/// `ModelExchange` with FMPy's CVode), at [`SIMULATION_RTOL`].
 pub fn fmpy_simulate_as(fmu: &Path, csv: &Path, stop: f64, outputs: &[&str], interface: &str) {
     run_python(
         "fmpy_checks.py",
@@ -125,6 +129,8 @@ pub fn fmpy_simulate_as(fmu: &Path, csv: &Path, stop: f64, outputs: &[&str], int
             &outputs.join(","),
             "--interface",
             interface,
+            "--rtol",
+            &SIMULATION_RTOL.to_string(),
         ],
     );
 }
