@@ -1022,17 +1022,38 @@ pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
     enterEventMode: *mut fmi2Boolean,
     terminateSimulation: *mut fmi2Boolean,
 ) -> fmi2Status {
-    with_slot(c, "fmi2CompletedIntegratorStep", |slot| {
-        if enterEventMode.is_null() || terminateSimulation.is_null() {
+    // SAFETY: by the caller's guarantee.
+    unsafe {
+        completed_integrator_step(
+            c,
+            "fmi2CompletedIntegratorStep",
+            [enterEventMode, terminateSimulation],
+            0,
+        )
+    }
+}
+
+/// fmi2/fmi3CompletedIntegratorStep: never asks for an event or the end,
+/// `no` being the standard's false.
+///
+/// # Safety
+/// The flags are null or valid for writes.
+pub(crate) unsafe fn completed_integrator_step<B: Copy>(
+    c: fmi2Component,
+    call: &'static str,
+    flags: [*mut B; 2],
+    no: B,
+) -> fmi2Status {
+    with_slot(c, call, |slot| {
+        if flags.iter().any(|f| f.is_null()) {
             return Err(CallError::InvalidArgument(
                 "enterEventMode or terminateSimulation is a null pointer".into(),
             ));
         }
         slot.instance.completed_integrator_step()?;
-        // SAFETY: non-null; the caller passes valid pointers.
-        unsafe {
-            *enterEventMode = 0;
-            *terminateSimulation = 0;
+        for flag in flags {
+            // SAFETY: non-null; the caller passes valid pointers.
+            unsafe { *flag = no };
         }
         Ok(Status::Ok)
     })

@@ -1339,20 +1339,15 @@ pub unsafe extern "C" fn fmi3CompletedIntegratorStep(
     terminateSimulation: *mut fmi3Boolean,
 ) -> fmi3Status {
     let _ = noSetFMUStatePriorToCurrentPoint;
-    with_slot(instance, "fmi3CompletedIntegratorStep", |slot| {
-        if enterEventMode.is_null() || terminateSimulation.is_null() {
-            return Err(CallError::InvalidArgument(
-                "enterEventMode or terminateSimulation is a null pointer".into(),
-            ));
-        }
-        slot.instance.completed_integrator_step()?;
-        // SAFETY: non-null; the caller passes valid pointers.
-        unsafe {
-            *enterEventMode = false;
-            *terminateSimulation = false;
-        }
-        Ok(Status::Ok)
-    })
+    // SAFETY: by the caller's guarantee.
+    unsafe {
+        fmi2::completed_integrator_step(
+            instance,
+            "fmi3CompletedIntegratorStep",
+            [enterEventMode, terminateSimulation],
+            false,
+        )
+    }
 }
 
 /// fmi3SetTime (Model Exchange).

@@ -483,9 +483,8 @@ impl Problem<'_> {
         }
         let center = best.1;
         let critical = 2.0 * (center.0[RecordParam::Sigma0.index()] * center.mass()).sqrt();
-        let top_speed = derivatives(self.record)
-            .velocity
-            .iter()
+        // The measured velocity the anchored problem carries (found once per fit).
+        let top_speed = (self.anchors.velocity.into_iter().flatten())
             .filter(|v| v.is_finite())
             .fold(0.0f64, |m, v| m.max(v.abs()));
         let level = 0.5 * (center.0[fc] + center.0[fs]);
