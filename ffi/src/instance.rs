@@ -228,7 +228,10 @@ impl std::fmt::Debug for Instance {
 /// engine, which has no colliders.
 fn load_source(resources: &Path) -> Result<Source, LoadError> {
     let scenario = Scenario::from_file(&resources.join(crate::resources::SCENARIO_FILE))?;
-    if scenario.solver.engine != fistage_model::EngineKind::Native {
+    if !matches!(
+        scenario.solver.engine,
+        fistage_model::EngineKind::Native | fistage_model::EngineKind::Auto
+    ) {
         return Err(scenario.error(
             "solver.engine",
             format!(

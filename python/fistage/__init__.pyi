@@ -35,6 +35,25 @@ class Result:
     def to_pandas(self) -> Any:
         """The signals as a pandas DataFrame indexed by time (needs pandas)."""
 
+class Plant:
+    """The stage as an ODE x' = f(t, x) for Python's own integrators (e.g. scipy's solve_ivp)."""
+
+    n_states: int
+    state_names: List[str]
+    x0: numpy.typing.NDArray[numpy.float64]
+    """The scenario's start state."""
+    nominal: numpy.typing.NDArray[numpy.float64]
+    """Typical state sizes: fistage's absolute tolerance is rtol * atol_scale * nominal."""
+    atol_scale: float
+    duration: float
+    sample_times: numpy.typing.NDArray[numpy.float64]
+    breakpoints: List[float]
+    """Times where the inputs jump: restart an integrator there."""
+    def rhs(self, t: float, x: numpy.typing.NDArray[numpy.float64]) -> numpy.typing.NDArray[numpy.float64]:
+        """The state derivative, the evaluation fistage integrates."""
+    def jacobian(self, t: float, x: numpy.typing.NDArray[numpy.float64]) -> numpy.typing.NDArray[numpy.float64]:
+        """d rhs / dx, exact (dual numbers)."""
+
 class Scenario:
     """A scenario: its TOML text, the file its paths resolve against, and overrides."""
 
@@ -51,6 +70,8 @@ class Scenario:
             progress: Optional[Callable[[float], None]] = None) -> Result:
         """Simulates the scenario (interpreter released) and returns its signals; progress(fraction)
         now and then; Ctrl-C or an exception in the callback stops the run."""
+    def plant(self) -> Plant:
+        """The stage as an ODE for Python's own integrators."""
     def modes(self, equilibrium: str = "slipping") -> Dict[str, Any]:
         """The linearisation at an equilibrium, as modes.json, with numpy eigenvalues."""
     def sweep(self, threads: Optional[int] = None,

@@ -39,6 +39,7 @@ create_exception!(
 );
 
 mod identify;
+mod plant;
 mod studies;
 
 fn load_error(e: LoadError) -> PyErr {
@@ -194,6 +195,13 @@ impl Scenario {
             units: units.unbind(),
             summary,
         })
+    }
+
+    /// plant() -> Plant: the stage as an ODE x' = f(t, x) for Python's own
+    /// integrators: `rhs(t, x)`, `jacobian(t, x)`, `x0`, `nominal`,
+    /// `sample_times`, `breakpoints` (restart an integrator there).
+    fn plant(&self) -> PyResult<plant::Plant> {
+        plant::Plant::new(self.loaded().map_err(load_error)?).map_err(load_error)
     }
 
     /// modes(equilibrium="slipping") -> dict: the linearisation at the
@@ -419,6 +427,7 @@ fn _restore_scenario(text: String, file: String, overrides: Vec<(String, f64)>) 
 fn _fistage(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Scenario>()?;
     m.add_class::<RunResult>()?;
+    m.add_class::<plant::Plant>()?;
     m.add_function(wrap_pyfunction!(load, m)?)?;
     m.add_function(wrap_pyfunction!(_restore_scenario, m)?)?;
     m.add("Error", m.py().get_type::<Error>())?;

@@ -162,10 +162,7 @@ fn verdict(
 /// reference's traverse velocity (a traverse at V over a still surface is,
 /// for the friction, the stage at rest over a surface sliding at -V).
 pub fn equilibrium_inputs(scenario: &fistage_model::Scenario) -> Inputs {
-    Inputs {
-        platform_velocity: scenario.platform_velocity - scenario.reference.traverse_velocity(),
-        ..Inputs::default()
-    }
+    scenario.slipping_inputs()
 }
 
 /// Everything the linearisation at one equilibrium says.

@@ -30,6 +30,10 @@ pub struct BenchArgs {
     /// Repeats per case (the median is reported).
     #[arg(long, default_value_t = 21)]
     pub repeat: usize,
+    /// Engines to time instead of the scenario's own (comma-separated:
+    /// native, imex, rosenbrock), each in its own rows of the table.
+    #[arg(long, value_delimiter = ',')]
+    pub engine: Vec<String>,
     /// Signal whose error is reported.
     #[arg(long, default_value = "encoder.position")]
     pub signal: String,
@@ -61,6 +65,13 @@ pub struct BenchArgs {
     /// horizons: about 90 s).
     #[arg(long)]
     pub record: bool,
+    /// Run the peers beside the native engine in the same invocation: CVODE
+    /// BDF (exact Jacobian) and Adams (SUNDIALS 6 from Debian's
+    /// libsundials-dev, opened at run time) and SciPy's solve_ivp (RK45,
+    /// DOP853, BDF; through the Python package, with `--python` or
+    /// target/py-venv/bin/python), with a table of CPU-time ratios.
+    #[arg(long)]
+    pub peers: bool,
     /// Python with FMPy for the FMU table (default: the test environment's,
     /// `target/fmi-venv/bin/python`, else `python3`).
     #[arg(long)]
@@ -93,7 +104,7 @@ pub(crate) fn thread_cpu_time() -> f64 {
     }
 }
 
-struct Timing {
+pub(crate) struct Timing {
     wall_s: f64,
     cpu_s: f64,
     trajectory: Trajectory,
@@ -135,7 +146,7 @@ fn time_run(
     })
 }
 
-fn median(values: &mut [f64]) -> f64 {
+pub(crate) fn median(values: &mut [f64]) -> f64 {
     values.sort_by(f64::total_cmp);
     values[values.len() / 2]
 }
@@ -320,6 +331,17 @@ fn ident_table(repeat: usize) -> anyhow::Result<()> {
 fn engine_table(args: &BenchArgs, scenario: &Path, rtols: &[f64]) -> anyhow::Result<()> {
     let loaded = fistage_model::load(scenario)?;
     let engine = engine_for(&loaded.scenario);
+    let timed: Vec<Box<dyn Engine>> = if args.engine.is_empty() {
+        vec![engine_for(&loaded.scenario)]
+    } else {
+        args.engine
+            .iter()
+            .map(|name| {
+                fistage_sim::engine_by_name(name)
+                    .with_context(|| format!("--engine: no engine \"{name}\""))
+            })
+            .collect::<anyhow::Result<_>>()?
+    };
     eprintln!("reference run at rtol {:e} ...", args.reference_rtol);
     let reference = time_run(&loaded, engine.as_ref(), args.reference_rtol, 1)?;
     let simulated = loaded.scenario.duration;
@@ -333,29 +355,108 @@ fn engine_table(args: &BenchArgs, scenario: &Path, rtols: &[f64]) -> anyhow::Res
         args.reference_rtol
     );
     println!(
-        "| rtol | wall ms | CPU ms | x real time | steps | rejected | RHS evals | max error (m) | relative error |"
+        "| rtol | wall ms | CPU ms | x real time | steps | rejected | RHS evals | max error (m) | relative error | method |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    let cvode = args.peers.then(crate::peers::cvode::Cvode::open);
+    let mut ratios = Vec::new();
     for &rtol in rtols {
-        let timing = time_run(&loaded, engine.as_ref(), rtol, args.repeat)?;
-        let (error, relative) = max_deviation(
-            &loaded,
-            &timing.trajectory,
-            &reference.trajectory,
-            &args.signal,
-        )?;
-        let counts = timing.trajectory.stats.counts;
+        let mut first = None;
+        for engine in &timed {
+            let timing = time_run(&loaded, engine.as_ref(), rtol, args.repeat)?;
+            let (error, relative) = max_deviation(
+                &loaded,
+                &timing.trajectory,
+                &reference.trajectory,
+                &args.signal,
+            )?;
+            let counts = timing.trajectory.stats.counts;
+            println!(
+                "| {rtol:.0e} | {:.2} | {:.2} | {:.0} | {} | {} | {} | {error:.2e} | {relative:.2e} | fistage {} |",
+                timing.wall_s * 1e3,
+                timing.cpu_s * 1e3,
+                simulated / timing.cpu_s,
+                counts.steps,
+                counts.rejected,
+                counts.rhs_evaluations,
+                timing.trajectory.stats.engine,
+            );
+            first.get_or_insert(timing);
+        }
+        let timing = first.context("no engine timed")?;
+        let Some(cvode) = &cvode else { continue };
+        let mut peers = match cvode {
+            Ok(cvode) => crate::peers::cvode_runs(cvode, &loaded, rtol, args.repeat)?,
+            Err(reason) => vec![Err(crate::peers::PeerSkipped {
+                method: "CVODE".into(),
+                reason: reason.clone(),
+            })],
+        };
+        let times = &timing.trajectory.times;
+        peers.extend(crate::peers::scipy::scipy_runs(
+            &peer_python(args),
+            scenario,
+            rtol,
+            loaded.model.n_states(),
+            times,
+        )?);
+        for peer in peers {
+            match peer {
+                Ok(run) => {
+                    let (error, relative) = max_deviation(
+                        &loaded,
+                        &run.trajectory,
+                        &reference.trajectory,
+                        &args.signal,
+                    )?;
+                    let (steps, rejected) = if run.steps_known {
+                        (
+                            run.counts.steps.to_string(),
+                            run.counts.rejected.to_string(),
+                        )
+                    } else {
+                        ("-".to_string(), "-".to_string())
+                    };
+                    println!(
+                        "| {rtol:.0e} | {:.2} | {:.2} | {:.0} | {steps} | {rejected} | {} | {error:.2e} | {relative:.2e} | {} |",
+                        run.wall_s * 1e3,
+                        run.cpu_s * 1e3,
+                        simulated / run.cpu_s,
+                        run.counts.rhs_evaluations,
+                        run.method,
+                    );
+                    ratios.push((rtol, run.method, run.cpu_s / timing.cpu_s, relative));
+                }
+                Err(skipped) => println!(
+                    "| {rtol:.0e} | - | - | - | - | - | - | - | - | {}: not run ({}) |",
+                    skipped.method, skipped.reason
+                ),
+            }
+        }
+    }
+    if !ratios.is_empty() {
         println!(
-            "| {rtol:.0e} | {:.2} | {:.2} | {:.0} | {} | {} | {} | {error:.2e} | {relative:.2e} |",
-            timing.wall_s * 1e3,
-            timing.cpu_s * 1e3,
-            simulated / timing.cpu_s,
-            counts.steps,
-            counts.rejected,
-            counts.rhs_evaluations,
+            "\nCPU time of each peer over fistage's at the same rtol, in this one invocation:\n"
         );
+        println!("| rtol | peer | peer CPU / fistage CPU | peer relative error |");
+        println!("|---|---|---|---|");
+        for (rtol, method, ratio, relative) in ratios {
+            println!("| {rtol:.0e} | {method} | {ratio:.1} | {relative:.2e} |");
+        }
     }
     Ok(())
+}
+
+/// The Python the SciPy peer runs: `--python`, else the package's test environment, else python3.
+fn peer_python(args: &BenchArgs) -> PathBuf {
+    args.python.clone().unwrap_or_else(|| {
+        let venv = PathBuf::from("target/py-venv/bin/python");
+        if venv.is_file() {
+            venv
+        } else {
+            PathBuf::from("python3")
+        }
+    })
 }
 
 /// Relative difference of the steady-state peak-to-peak of a signal.

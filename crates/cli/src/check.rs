@@ -1,7 +1,8 @@
 //! `fistage check SCENARIO`: load and validate a scenario and its robot
 //! without simulating (everything `fistage run` checks before it integrates:
 //! signal names, colliders, the start state), and print what was assembled: bodies, joints, elements, the
-//! evaluation path, the state layout and the output signals.
+//! evaluation path, the integration method the default engine chose and why,
+//! the state layout and the output signals.
 
 use std::path::PathBuf;
 
@@ -28,6 +29,7 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     print_bodies(model);
     print_elements(model);
     println!("evaluation: {}", evaluation_path(model.evaluation_path()));
+    print_method(&loaded)?;
     println!("states ({}):", model.n_states());
     for ((name, kind), nominal) in model
         .layout()
@@ -42,6 +44,24 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     for signal in model.signals() {
         println!("  {} [{}]", signal.name, signal.unit);
     }
+    Ok(())
+}
+
+/// The engine and, for the default engine, the method it chose and why.
+fn print_method(loaded: &fistage_model::Loaded) -> anyhow::Result<()> {
+    let scenario = &loaded.scenario;
+    let engine = scenario.solver.engine;
+    if engine != fistage_model::EngineKind::Auto {
+        println!("engine: {engine} (solver.engine)");
+        return Ok(());
+    }
+    let x0 = fistage_sim::initial_state(&loaded.model, scenario)?;
+    let choice = fistage_sim::AutoEngine::for_scenario(scenario).choice(&loaded.model, &x0);
+    println!(
+        "engine: auto -> {} ({})",
+        choice.method.name(),
+        choice.reason
+    );
     Ok(())
 }
 

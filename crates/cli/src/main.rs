@@ -18,6 +18,7 @@ mod identify_record;
 mod lyapunov;
 mod modes;
 mod output;
+mod peers;
 mod progress;
 mod provenance;
 mod robust;

@@ -67,6 +67,9 @@ pub struct Workspace<S: Scalar = f64> {
     pub(crate) generalized: Vec<S>,
     /// Scratch space of the rooted fast path ([`crate::rooted`]).
     pub(crate) rooted: crate::rooted::RootedScratch<S>,
+    /// How the bristle states enter the evaluation (explicit unless an
+    /// implicit-explicit integrator asks otherwise).
+    pub(crate) bristles: crate::bristle::BristleStage<S>,
     /// Per-element results of the last [`crate::Model::evaluate`] or [`crate::Model::outputs`]
     /// (the fast paths of [`crate::Model::rhs`] fill only the sensor, actuator and
     /// tracking-error entries).
@@ -120,6 +123,7 @@ impl Structure {
                 .collect(),
             generalized: vec![S::zero(); nv],
             rooted,
+            bristles: crate::bristle::BristleStage::explicit(nf),
             elements: ElementValues {
                 friction_force: vec![S::zero(); nf],
                 slip_velocity: vec![S::zero(); nf],
@@ -444,9 +448,7 @@ impl Structure {
             let axis = cast3::<S>(&friction.axis);
             let (point, point_velocity) = point_state(frame, &friction.point, ws);
             let slip = point_velocity.dot(&axis) - inputs.platform_velocity;
-            let (force, z_rate) = friction
-                .lugre
-                .force_and_z_rate_of(slip, x[friction.z_index]);
+            let (force, z_rate) = ws.bristles.law(k, friction, slip, x[friction.z_index]);
             apply_wrench(ws, frame, &point, &(axis * -force), &Vector3::zeros());
             ws.elements.friction_force[k] = force;
             ws.elements.slip_velocity[k] = slip;

@@ -67,10 +67,18 @@ impl Evaluator {
         ws: &mut Workspace<S>,
     ) {
         match self {
-            Self::ConstantJacobian(map) => map.rhs(model, x, inputs, dx, &mut ws.generalized),
-            Self::RootedBodies(plan) => {
-                plan.rhs(model, x, inputs, dx, &mut ws.rooted, &mut ws.elements)
+            Self::ConstantJacobian(map) => {
+                map.rhs(model, x, inputs, dx, &mut ws.generalized, &mut ws.bristles)
             }
+            Self::RootedBodies(plan) => plan.rhs(
+                model,
+                x,
+                inputs,
+                dx,
+                &mut ws.rooted,
+                &mut ws.elements,
+                &mut ws.bristles,
+            ),
             Self::General => model.rhs_general(x, inputs, dx, ws),
         }
     }

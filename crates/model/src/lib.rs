@@ -61,6 +61,7 @@
 
 pub mod assembly;
 pub mod body_motion;
+mod bristle;
 pub mod compensation;
 pub mod dahl;
 pub mod dynamics;

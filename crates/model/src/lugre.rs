@@ -294,11 +294,40 @@ impl<S: Scalar> LugreOf<S> {
     /// level is ready before it.
     #[inline]
     pub fn force_and_z_rate(&self, v: S, z: S) -> (S, S) {
-        let r = v * (S::one() / self.v_s);
-        let level = self.f_c + (self.f_s - self.f_c) * (-(r * r)).exp();
+        let level = self.level(v);
         let z_dot = v - kink_abs(v) * self.sigma0 * z / level;
-        let force = self.sigma0 * z + self.sigma2 * v + self.sigma1 * z_dot;
-        (force, z_dot)
+        (self.force(v, z, z_dot), z_dot)
+    }
+
+    /// The law at an implicit stage of the bristle state: for a given slip
+    /// velocity the bristle equation `z' = v - (sigma0 |v| / g(v)) z` is
+    /// linear in `z`, so the `z` that solves `z = c + step z'(v, z)` is
+    /// exact, `z = (c + step v) / (1 + step sigma0 |v| / g(v))`. Returns the
+    /// force and the rate at that `z`, and the `z` itself. With `step` 0 it
+    /// is [`Self::force_and_z_rate`] at `z = c`.
+    #[inline]
+    pub fn implicit_stage(&self, v: S, c: S, step: S) -> (S, S, S) {
+        // With r = sigma0 |v| / level: z' = v - r z and z = c + step z' give
+        // z' = (v - r c) / (1 + step r), written with one division.
+        let pull = kink_abs(v) * self.sigma0;
+        let level = self.level(v);
+        let z_dot = (v * level - pull * c) / (level + step * pull);
+        let z = c + step * z_dot;
+        (self.force(v, z, z_dot), z_dot, z)
+    }
+
+    /// The Stribeck level sigma0 g(v) = f_C + (f_S - f_C) exp(-(v / v_s)^2), N
+    /// (the curve's argument a multiplication, not a division).
+    #[inline]
+    fn level(&self, v: S) -> S {
+        let r = v * (S::one() / self.v_s);
+        self.f_c + (self.f_s - self.f_c) * (-(r * r)).exp()
+    }
+
+    /// The friction force sigma0 z + sigma1 z' + sigma2 v.
+    #[inline]
+    fn force(&self, v: S, z: S, z_dot: S) -> S {
+        self.sigma0 * z + self.sigma2 * v + self.sigma1 * z_dot
     }
 }
 

@@ -138,6 +138,34 @@ impl Model {
         self.evaluator.rhs(&self.structure, x, inputs, dx, ws);
     }
 
+    /// [`Model::rhs`] at an implicit stage of the bristle states, for
+    /// implicit-explicit integrators: on entry each contact's bristle entry
+    /// of `x` holds the explicit part `c` of the stage, on return the `z`
+    /// that solves `z = c + step z'(v, z)` exactly (the bristle equation is
+    /// linear in `z` at the stage's slip velocity, which does not depend on
+    /// any bristle state); `dx` is the derivative at the solved point.
+    #[inline]
+    pub fn rhs_implicit_bristles(
+        &self,
+        x: &mut [f64],
+        inputs: &InputValues<f64>,
+        step: f64,
+        dx: &mut [f64],
+        ws: &mut Workspace,
+    ) {
+        ws.bristles.set_step(step);
+        self.evaluator.rhs(&self.structure, x, inputs, dx, ws);
+        ws.bristles.set_step(0.0);
+        for (contact, z) in self.structure.frictions.iter().zip(ws.bristles.solved()) {
+            x[contact.z_index] = *z;
+        }
+    }
+
+    /// Indices of the bristle states of the LuGre contacts, in contact order.
+    pub fn bristle_states(&self) -> Vec<usize> {
+        self.structure.frictions.iter().map(|f| f.z_index).collect()
+    }
+
     /// State derivative by the general recursive dynamics, for any model and
     /// scalar (the reference every faster evaluation is tested against).
     pub fn rhs_general<S: Scalar>(

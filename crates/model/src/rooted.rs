@@ -18,6 +18,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
+use crate::bristle::BristleStage;
 use crate::elements::{Frame, JointMotion, RigidBody, Structure};
 use crate::laws::{
     bushing_wrench, cast3, cast33, newton_euler, quaternion_rate, quaternion_rotation, relative,
@@ -378,6 +379,7 @@ impl RootedPlan {
     }
 
     /// The state derivative.
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn rhs<S: Scalar>(
         &self,
         model: &Structure,
@@ -386,6 +388,7 @@ impl RootedPlan {
         dx: &mut [S],
         scratch: &mut RootedScratch<S>,
         elements: &mut ElementValues<S>,
+        bristles: &mut BristleStage<S>,
     ) {
         debug_assert!(
             scratch.floating.len() == self.floating.len()
@@ -395,7 +398,7 @@ impl RootedPlan {
         self.body_states(x, dx, scratch);
         self.isolator_forces(model, scratch);
         self.servo(model, x, inputs, scratch, elements);
-        self.friction_forces(model, x, inputs, dx, scratch);
+        self.friction_forces(model, x, inputs, dx, scratch, bristles);
         self.accelerations(dx, scratch);
         if let Some(controller) = &model.controller {
             controller.write_rates(&elements.servo, dx);
@@ -645,13 +648,12 @@ impl RootedPlan {
         inputs: &InputValues<S>,
         dx: &mut [S],
         scratch: &mut RootedScratch<S>,
+        bristles: &mut BristleStage<S>,
     ) {
-        for (contact, friction) in self.frictions.iter().zip(&model.frictions) {
+        for (k, (contact, friction)) in self.frictions.iter().zip(&model.frictions).enumerate() {
             let (_, velocity, arm) = Self::reading(contact, scratch);
             let slip = velocity - inputs.platform_velocity;
-            let (force, z_rate) = friction
-                .lugre
-                .force_and_z_rate_of(slip, x[friction.z_index]);
+            let (force, z_rate) = bristles.law(k, friction, slip, x[friction.z_index]);
             dx[friction.z_index] = z_rate;
             Self::push(contact, &arm, -force, scratch);
         }

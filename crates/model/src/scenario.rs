@@ -177,6 +177,9 @@ impl ControllerSettings {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum EngineKind {
+    /// The cheapest sound adaptive method for the model, chosen before the
+    /// run from its linearisation: `native` or `imex` (what `fistage check` shows).
+    Auto,
     /// Error-controlled explicit Dormand-Prince 5(4) (also `dopri5`).
     #[default]
     #[serde(alias = "dopri5")]
@@ -184,23 +187,30 @@ pub enum EngineKind {
     /// Linearly implicit Rosenbrock-W ROS34PW2 with the exact Jacobian (also `implicit`).
     #[serde(alias = "implicit")]
     Rosenbrock,
+    /// Additive Runge-Kutta ARK5(4)8L[2]SA, the bristle states implicit (also `ark548`).
+    #[serde(alias = "ark548")]
+    Imex,
     /// rapier3d-f64 with a fixed step, under the model's own force elements.
     Rapier,
 }
 
 impl EngineKind {
     /// Every engine, in the order help texts list them.
-    pub const ALL: [EngineKind; 3] = [
+    pub const ALL: [EngineKind; 5] = [
+        EngineKind::Auto,
         EngineKind::Native,
         EngineKind::Rosenbrock,
+        EngineKind::Imex,
         EngineKind::Rapier,
     ];
 
     /// The name in scenario files and on the command line.
     pub fn name(self) -> &'static str {
         match self {
+            EngineKind::Auto => "auto",
             EngineKind::Native => "native",
             EngineKind::Rosenbrock => "rosenbrock",
+            EngineKind::Imex => "imex",
             EngineKind::Rapier => "rapier",
         }
     }
@@ -223,8 +233,10 @@ impl std::str::FromStr for EngineKind {
     /// Parses a name or alias as scenario files accept them.
     fn from_str(text: &str) -> Result<Self, String> {
         match text {
+            "auto" => Ok(EngineKind::Auto),
             "native" | "dopri5" => Ok(EngineKind::Native),
             "rosenbrock" | "implicit" => Ok(EngineKind::Rosenbrock),
+            "imex" | "ark548" => Ok(EngineKind::Imex),
             "rapier" => Ok(EngineKind::Rapier),
             other => Err(format!(
                 "unknown engine \"{other}\" (available: {})",
@@ -481,6 +493,16 @@ pub struct Scenario {
 }
 
 impl Scenario {
+    /// The inputs of the slipping equilibrium: the stage at rest while the
+    /// counter-surfaces slide at the platform velocity less the reference's
+    /// traverse velocity (what `fistage modes` and the method choice read).
+    pub fn slipping_inputs(&self) -> crate::Inputs {
+        crate::Inputs {
+            platform_velocity: self.platform_velocity - self.reference.traverse_velocity(),
+            ..crate::Inputs::default()
+        }
+    }
+
     /// Reads and checks a scenario file (not the robot it names).
     pub fn from_file(path: &Path) -> Result<Self, LoadError> {
         let text = crate::input::read_text(path, crate::input::MAX_DESCRIPTION_BYTES).map_err(

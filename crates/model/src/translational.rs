@@ -7,6 +7,7 @@
 //! are the same functions both paths call. A test checks that both paths give
 //! the same state derivative.
 
+use crate::bristle::BristleStage;
 use crate::elements::{Inputs, Structure};
 use crate::laws::bushing_force;
 use crate::rooted::RootedScratch;
@@ -122,13 +123,14 @@ impl TranslationalMap {
         inputs: &InputValues<S>,
         dx: &mut [S],
         generalized: &mut [S],
+        bristles: &mut BristleStage<S>,
     ) {
         match self.nv {
-            1 => self.rhs_sized::<1, S>(model, x, inputs, dx, generalized),
-            2 => self.rhs_sized::<2, S>(model, x, inputs, dx, generalized),
-            3 => self.rhs_sized::<3, S>(model, x, inputs, dx, generalized),
-            4 => self.rhs_sized::<4, S>(model, x, inputs, dx, generalized),
-            _ => self.rhs_sized::<DYNAMIC, S>(model, x, inputs, dx, generalized),
+            1 => self.rhs_sized::<1, S>(model, x, inputs, dx, generalized, bristles),
+            2 => self.rhs_sized::<2, S>(model, x, inputs, dx, generalized, bristles),
+            3 => self.rhs_sized::<3, S>(model, x, inputs, dx, generalized, bristles),
+            4 => self.rhs_sized::<4, S>(model, x, inputs, dx, generalized, bristles),
+            _ => self.rhs_sized::<DYNAMIC, S>(model, x, inputs, dx, generalized, bristles),
         }
     }
 
@@ -141,6 +143,7 @@ impl TranslationalMap {
         inputs: &InputValues<S>,
         dx: &mut [S],
         generalized: &mut [S],
+        bristles: &mut BristleStage<S>,
     ) {
         let nv = row_length::<N>(self.nv);
         let nq = model.layout.nq;
@@ -183,9 +186,7 @@ impl TranslationalMap {
         // everything else is summed by the time it is ready.
         for (k, friction) in model.frictions.iter().enumerate() {
             let slip = dot(row::<N>(&self.friction_rows, nv, k), v) - inputs.platform_velocity;
-            let (f, z_rate) = friction
-                .lugre
-                .force_and_z_rate_of(slip, x[friction.z_index]);
+            let (f, z_rate) = bristles.law(k, friction, slip, x[friction.z_index]);
             let column = row::<N>(&self.friction_accelerations, nv, k);
             axpy(-f, column, &mut dx[nq..nq + nv]);
             dx[friction.z_index] = z_rate;

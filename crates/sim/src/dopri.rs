@@ -87,6 +87,52 @@ impl Tolerances {
     }
 }
 
+/// Hairer's starting-step heuristic for a method of order 5 from (t, x) with
+/// f(t, x) = `f0`: the step and the evaluations it took (one). `stage` and
+/// `f1` are scratch space of the state's length.
+pub fn starting_step<S: OdeSystem + ?Sized>(
+    system: &mut S,
+    t: f64,
+    x: &[f64],
+    f0: &[f64],
+    tol: &Tolerances,
+    stage: &mut [f64],
+    f1: &mut [f64],
+) -> (f64, u64) {
+    let count = x.len();
+    let n = count as f64;
+    let scale = |i: usize| tol.atol[i] + tol.rtol * x[i].abs();
+    let mut d0 = 0.0;
+    let mut d1 = 0.0;
+    for i in 0..count {
+        let sc = scale(i);
+        d0 += (x[i] / sc).powi(2);
+        d1 += (f0[i] / sc).powi(2);
+    }
+    let (d0, d1) = ((d0 / n).sqrt(), (d1 / n).sqrt());
+    let mut h0 = if d0 < 1e-5 || d1 < 1e-5 {
+        1e-6
+    } else {
+        0.01 * d0 / d1
+    };
+    h0 = h0.min(tol.max_step);
+    for i in 0..count {
+        stage[i] = x[i] + h0 * f0[i];
+    }
+    system.rhs(t + h0, stage, f1);
+    let mut d2 = 0.0;
+    for i in 0..count {
+        d2 += ((f1[i] - f0[i]) / scale(i)).powi(2);
+    }
+    let d2 = (d2 / n).sqrt() / h0;
+    let h1 = if d1.max(d2) <= 1e-15 {
+        (h0 * 1e-3).max(1e-6)
+    } else {
+        (0.01 / d1.max(d2)).powf(0.2)
+    };
+    ((100.0 * h0).min(h1).min(tol.max_step), 1)
+}
+
 /// Why a step attempt could not proceed.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum StepFailure {
@@ -233,44 +279,20 @@ impl DormandPrince {
         self.log_error_previous = 1e-4f64.ln();
     }
 
-    fn scale(&self, i: usize, a: f64, b: f64) -> f64 {
-        self.tol.atol[i] + self.tol.rtol * a.abs().max(b.abs())
-    }
-
-    /// Hairer's starting-step heuristic.
+    /// Hairer's starting-step heuristic ([`starting_step`]).
     fn initial_step(&mut self, system: &mut dyn OdeSystem) -> f64 {
-        let n = self.n as f64;
-        let mut d0 = 0.0;
-        let mut d1 = 0.0;
-        for i in 0..self.n {
-            let sc = self.scale(i, self.x[i], self.x[i]);
-            d0 += (self.x[i] / sc).powi(2);
-            d1 += (self.k[0][i] / sc).powi(2);
-        }
-        let (d0, d1) = ((d0 / n).sqrt(), (d1 / n).sqrt());
-        let mut h0 = if d0 < 1e-5 || d1 < 1e-5 {
-            1e-6
-        } else {
-            0.01 * d0 / d1
-        };
-        h0 = h0.min(self.tol.max_step);
-        for i in 0..self.n {
-            self.stage[i] = self.x[i] + h0 * self.k[0][i];
-        }
-        system.rhs(self.t + h0, &self.stage, &mut self.k[1]);
-        self.counts.rhs_evaluations += 1;
-        let mut d2 = 0.0;
-        for i in 0..self.n {
-            let sc = self.scale(i, self.x[i], self.x[i]);
-            d2 += ((self.k[1][i] - self.k[0][i]) / sc).powi(2);
-        }
-        let d2 = (d2 / n).sqrt() / h0;
-        let h1 = if d1.max(d2) <= 1e-15 {
-            (h0 * 1e-3).max(1e-6)
-        } else {
-            (0.01 / d1.max(d2)).powf(0.2)
-        };
-        (100.0 * h0).min(h1).min(self.tol.max_step)
+        let (k0, rest) = self.k.split_at_mut(1);
+        let (h, evaluations) = starting_step(
+            system,
+            self.t,
+            &self.x,
+            &k0[0],
+            &self.tol,
+            &mut self.stage,
+            &mut rest[0],
+        );
+        self.counts.rhs_evaluations += evaluations;
+        h
     }
 
     /// Takes one accepted step, not beyond `t_stop`. Rejected attempts are retried

@@ -10,6 +10,7 @@ use std::ops::ControlFlow;
 
 use crate::dopri::{DormandPrince, OdeSystem, StepCounts, StepFailure, Tolerances};
 use crate::excitation::Excitation;
+use crate::imex::{ImexRungeKutta, SplitSystem};
 use crate::rosenbrock::{JacobianSystem, Rosenbrock};
 use crate::settings::SimError;
 
@@ -20,6 +21,8 @@ pub(crate) struct ModelSystem<'a> {
     /// The inputs, when they do not depend on time.
     constant_inputs: Option<InputValues<f64>>,
     workspace: &'a mut Workspace,
+    /// The bristle states (implicit in the implicit-explicit integrator).
+    bristles: Vec<usize>,
 }
 
 impl<'a> ModelSystem<'a> {
@@ -35,6 +38,7 @@ impl<'a> ModelSystem<'a> {
                 .is_constant()
                 .then(|| excitation.inputs(0.0).values()),
             workspace,
+            bristles: model.bristle_states(),
         }
     }
 
@@ -56,6 +60,19 @@ impl OdeSystem for ModelSystem<'_> {
     fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
         let inputs = self.inputs(t);
         self.model.rhs_of(x, &inputs, dx, self.workspace);
+    }
+}
+
+impl SplitSystem for ModelSystem<'_> {
+    fn implicit_states(&self) -> &[usize] {
+        &self.bristles
+    }
+
+    #[inline]
+    fn rhs_implicit(&mut self, t: f64, x: &mut [f64], step: f64, dx: &mut [f64]) {
+        let inputs = self.inputs(t);
+        self.model
+            .rhs_implicit_bristles(x, &inputs, step, dx, self.workspace);
     }
 }
 
@@ -128,6 +145,7 @@ macro_rules! integrating {
 }
 
 integrating!(DormandPrince);
+integrating!(ImexRungeKutta);
 integrating!(Rosenbrock);
 
 /// The ends of the segments from `t0` to `t_end`: the breakpoints strictly

@@ -8,11 +8,13 @@
 use std::ops::ControlFlow;
 use std::time::Instant;
 
-use fistage_model::{EngineKind, Model};
+use fistage_model::{EngineKind, Inputs, Model, Scenario};
 
 use crate::dopri::{DormandPrince, Tolerances};
 use crate::driver::{Integrating, ModelSystem, drive, tolerances};
 use crate::excitation::Excitation;
+use crate::imex::ImexRungeKutta;
+use crate::method::{Method, MethodChoice, choose_method};
 use crate::rosenbrock::Rosenbrock;
 use crate::settings::{SimError, SimSettings, check_settings, sample_times};
 use crate::trajectory::{SolverStats, Trajectory};
@@ -129,6 +131,86 @@ impl Engine for NativeEngine {
             settings,
             progress,
             |system| DormandPrince::new(system, 0.0, x0, tol),
+        )
+    }
+}
+
+/// The default engine: the method [`choose_method`] picks for the model
+/// (explicit Dormand-Prince or the implicit-explicit pair), read at the
+/// slipping equilibrium under `slipping`. The trajectory names the method
+/// that ran.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct AutoEngine {
+    /// The inputs of the slipping equilibrium the choice is read at.
+    pub slipping: Inputs,
+}
+
+impl AutoEngine {
+    /// For a scenario: its counter-surfaces slide at the platform velocity
+    /// less the reference's traverse velocity.
+    pub fn for_scenario(scenario: &Scenario) -> Self {
+        Self {
+            slipping: scenario.slipping_inputs(),
+        }
+    }
+
+    /// The method this engine takes for `model` started at `x0`.
+    pub fn choice(&self, model: &Model, x0: &[f64]) -> MethodChoice {
+        choose_method(model, &self.slipping, x0)
+    }
+}
+
+impl Engine for AutoEngine {
+    fn kind(&self) -> EngineKind {
+        EngineKind::Auto
+    }
+
+    fn simulate(
+        &self,
+        model: &Model,
+        x0: &[f64],
+        excitation: &dyn Excitation,
+        settings: &SimSettings,
+        progress: &mut Progress<'_>,
+    ) -> Result<Trajectory, SimError> {
+        match self.choice(model, x0).method {
+            Method::DormandPrince => {
+                NativeEngine.simulate(model, x0, excitation, settings, progress)
+            }
+            Method::ImexBristles => ImexEngine.simulate(model, x0, excitation, settings, progress),
+        }
+    }
+}
+
+/// The implicit-explicit engine: Kennedy and Carpenter's ARK5(4)8L[2]SA
+/// with the bristle states implicit (solved exactly at each stage) and
+/// everything else explicit, for stages whose bristle relaxation, not
+/// accuracy, bounds the explicit step.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ImexEngine;
+
+impl Engine for ImexEngine {
+    fn kind(&self) -> EngineKind {
+        EngineKind::Imex
+    }
+
+    fn simulate(
+        &self,
+        model: &Model,
+        x0: &[f64],
+        excitation: &dyn Excitation,
+        settings: &SimSettings,
+        progress: &mut Progress<'_>,
+    ) -> Result<Trajectory, SimError> {
+        let tol = settings_tolerances(model, settings);
+        integrate(
+            self.kind(),
+            model,
+            x0,
+            excitation,
+            settings,
+            progress,
+            |system| ImexRungeKutta::new(system, 0.0, x0, tol),
         )
     }
 }

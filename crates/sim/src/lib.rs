@@ -41,8 +41,10 @@ pub mod dopri;
 mod driver;
 pub mod engine;
 pub mod excitation;
+pub mod imex;
 pub mod matfile;
 pub mod matread;
+pub mod method;
 pub mod metrics;
 pub mod rapier_engine;
 pub mod rosenbrock;
@@ -55,7 +57,9 @@ pub mod trajectory;
 
 pub use cosim::{HeldInputs, Stepper, StepperTolerances};
 pub use dopri::{Checkpoint, StepCounts};
-pub use engine::{Engine, NativeEngine, Progress, RosenbrockEngine, no_progress};
+pub use engine::{
+    AutoEngine, Engine, ImexEngine, NativeEngine, Progress, RosenbrockEngine, no_progress,
+};
 pub use excitation::{Excitation, ScenarioExcitation};
 pub use metrics::{SignalSummary, WindowStats, summarize, window_stats};
 pub use rapier_engine::RapierEngine;

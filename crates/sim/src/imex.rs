@@ -1,0 +1,501 @@
+//! Kennedy and Carpenter's additive Runge-Kutta pair ARK5(4)8L[2]SA
+//! (Appl. Numer. Math. 44, 2003): an explicit tableau for most states and an
+//! L-stable, stiffly accurate singly diagonally implicit tableau (first stage
+//! explicit) for the states a [`SplitSystem`] names implicit, the bristle
+//! deflections of the LuGre contacts. Their equation is linear in the state
+//! for given stage velocities, so each implicit stage is solved exactly
+//! inside the one right-hand-side evaluation of that stage: no Newton
+//! iteration, no Jacobian. The bristle relaxation (rates to 1e4 1/s and more
+//! while slipping) then no longer bounds the step.
+//!
+//! Fifth order with a fourth-order embedded estimate, the PI step-size
+//! controller and step-size rules of [`crate::dopri`], and cubic Hermite dense
+//! output from the values and derivatives at both ends of a step. Eight
+//! evaluations per step (seven stages and the derivative at the new point,
+//! which is the next step's first stage and the dense output's right end).
+
+use crate::dopri::{Checkpoint, OdeSystem, StepCounts, StepFailure, Tolerances, starting_step};
+
+/// A system with some states treated implicitly.
+pub trait SplitSystem: OdeSystem {
+    /// Indices of the implicitly treated states.
+    fn implicit_states(&self) -> &[usize];
+    /// f(t, x) at an implicit stage: on entry the implicit entries of `x`
+    /// hold the stage's explicit part `c`, on return the values that solve
+    /// `x_i = c_i + step f_i(t, x)`; `dx` is f at the solved point.
+    fn rhs_implicit(&mut self, t: f64, x: &mut [f64], step: f64, dx: &mut [f64]);
+}
+
+const EXPLICIT: [[f64; 8]; 8] = [
+    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [41.0 / 100.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [
+        367902744464.0 / 2072280473677.0,
+        677623207551.0 / 8224143866563.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+    ],
+    [
+        1268023523408.0 / 10340822734521.0,
+        0.0,
+        1029933939417.0 / 13636558850479.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+    ],
+    [
+        14463281900351.0 / 6315353703477.0,
+        0.0,
+        66114435211212.0 / 5879490589093.0,
+        -54053170152839.0 / 4284798021562.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+    ],
+    [
+        14090043504691.0 / 34967701212078.0,
+        0.0,
+        15191511035443.0 / 11219624916014.0,
+        -18461159152457.0 / 12425892160975.0,
+        -281667163811.0 / 9011619295870.0,
+        0.0,
+        0.0,
+        0.0,
+    ],
+    [
+        19230459214898.0 / 13134317526959.0,
+        0.0,
+        21275331358303.0 / 2942455364971.0,
+        -38145345988419.0 / 4862620318723.0,
+        -1.0 / 8.0,
+        -1.0 / 8.0,
+        0.0,
+        0.0,
+    ],
+    [
+        -19977161125411.0 / 11928030595625.0,
+        0.0,
+        -40795976796054.0 / 6384907823539.0,
+        177454434618887.0 / 12078138498510.0,
+        782672205425.0 / 8267701900261.0,
+        -69563011059811.0 / 9646580694205.0,
+        7356628210526.0 / 4942186776405.0,
+        0.0,
+    ],
+];
+const IMPLICIT: [[f64; 8]; 8] = [
+    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [41.0 / 200.0, 41.0 / 200.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [
+        41.0 / 400.0,
+        -567603406766.0 / 11931857230679.0,
+        41.0 / 200.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+    ],
+    [
+        683785636431.0 / 9252920307686.0,
+        0.0,
+        -110385047103.0 / 1367015193373.0,
+        41.0 / 200.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+    ],
+    [
+        3016520224154.0 / 10081342136671.0,
+        0.0,
+        30586259806659.0 / 12414158314087.0,
+        -22760509404356.0 / 11113319521817.0,
+        41.0 / 200.0,
+        0.0,
+        0.0,
+        0.0,
+    ],
+    [
+        218866479029.0 / 1489978393911.0,
+        0.0,
+        638256894668.0 / 5436446318841.0,
+        -1179710474555.0 / 5321154724896.0,
+        -60928119172.0 / 8023461067671.0,
+        41.0 / 200.0,
+        0.0,
+        0.0,
+    ],
+    [
+        1020004230633.0 / 5715676835656.0,
+        0.0,
+        25762820946817.0 / 25263940353407.0,
+        -2161375909145.0 / 9755907335909.0,
+        -211217309593.0 / 5846859502534.0,
+        -4269925059573.0 / 7827059040749.0,
+        41.0 / 200.0,
+        0.0,
+    ],
+    [
+        -872700587467.0 / 9133579230613.0,
+        0.0,
+        0.0,
+        22348218063261.0 / 9555858737531.0,
+        -1143369518992.0 / 8141816002931.0,
+        -39379526789629.0 / 19018526304540.0,
+        32727382324388.0 / 42900044865799.0,
+        41.0 / 200.0,
+    ],
+];
+const WEIGHTS: [f64; 8] = [
+    -872700587467.0 / 9133579230613.0,
+    0.0,
+    0.0,
+    22348218063261.0 / 9555858737531.0,
+    -1143369518992.0 / 8141816002931.0,
+    -39379526789629.0 / 19018526304540.0,
+    32727382324388.0 / 42900044865799.0,
+    41.0 / 200.0,
+];
+const EMBEDDED: [f64; 8] = [
+    -975461918565.0 / 9796059967033.0,
+    0.0,
+    0.0,
+    78070527104295.0 / 32432590147079.0,
+    -548382580838.0 / 3424219808633.0,
+    -33438840321285.0 / 15594753105479.0,
+    3629800801594.0 / 4656183773603.0,
+    4035322873751.0 / 18575991585200.0,
+];
+const NODES: [f64; 8] = [
+    0.0,
+    41.0 / 100.0,
+    2935347310677.0 / 11292855782101.0,
+    1426016391358.0 / 7196633302097.0,
+    92.0 / 100.0,
+    24.0 / 100.0,
+    3.0 / 5.0,
+    1.0,
+];
+
+/// The diagonal of the implicit tableau.
+const GAMMA: f64 = IMPLICIT[1][1];
+
+/// Stages.
+const STAGES: usize = 8;
+
+/// State-count marker for "known only at run time".
+const DYNAMIC: usize = 0;
+
+/// The integrator between steps.
+pub struct ImexRungeKutta {
+    tol: Tolerances,
+    n: usize,
+    implicit_states: Vec<usize>,
+    /// Current time.
+    pub t: f64,
+    /// Current state.
+    pub x: Vec<f64>,
+    /// Suggested next step.
+    pub h: f64,
+    /// Stage derivatives; slot 0 holds f at the current point.
+    k: [Vec<f64>; STAGES],
+    stage: Vec<f64>,
+    x_new: Vec<f64>,
+    error: Vec<f64>,
+    /// Start of the last accepted step: state and derivative (dense output).
+    x_previous: Vec<f64>,
+    f_previous: Vec<f64>,
+    /// The derivative at the end of the last accepted step, when a restart
+    /// has replaced slot 0 of `k` by the derivative under the new inputs.
+    f_end: Vec<f64>,
+    end_in_first_stage: bool,
+    t_previous: f64,
+    h_previous: f64,
+    log_error_previous: f64,
+    /// Counters.
+    pub counts: StepCounts,
+    non_finite: Option<usize>,
+}
+
+impl ImexRungeKutta {
+    /// Starts at (t0, x0): evaluates f once and picks an initial step.
+    pub fn new<S: SplitSystem + ?Sized>(
+        system: &mut S,
+        t0: f64,
+        x0: &[f64],
+        tol: Tolerances,
+    ) -> Self {
+        let mut integrator = Self::unstarted(system, t0, x0, tol);
+        system.rhs(t0, &integrator.x, &mut integrator.k[0]);
+        integrator.counts.rhs_evaluations += 1;
+        let (h, evaluations) = starting_step(
+            system,
+            t0,
+            &integrator.x,
+            &integrator.k[0],
+            &integrator.tol,
+            &mut integrator.stage,
+            &mut integrator.x_new,
+        );
+        integrator.h = h;
+        integrator.counts.rhs_evaluations += evaluations;
+        integrator
+    }
+
+    fn unstarted<S: SplitSystem + ?Sized>(
+        system: &S,
+        t0: f64,
+        x0: &[f64],
+        tol: Tolerances,
+    ) -> Self {
+        let n = system.dim();
+        let implicit_states = system.implicit_states().to_vec();
+        let zeros = || vec![0.0; n];
+        Self {
+            tol,
+            n,
+            implicit_states,
+            t: t0,
+            x: x0.to_vec(),
+            h: 0.0,
+            k: std::array::from_fn(|_| zeros()),
+            stage: zeros(),
+            x_new: zeros(),
+            error: zeros(),
+            x_previous: x0.to_vec(),
+            f_previous: zeros(),
+            f_end: zeros(),
+            end_in_first_stage: true,
+            t_previous: t0,
+            h_previous: 0.0,
+            log_error_previous: 1e-4f64.ln(),
+            counts: StepCounts::default(),
+            non_finite: None,
+        }
+    }
+
+    /// Resumes from a [`Checkpoint`].
+    pub fn resume<S: SplitSystem + ?Sized>(
+        system: &mut S,
+        checkpoint: &Checkpoint,
+        tol: Tolerances,
+    ) -> Self {
+        let mut integrator = Self::unstarted(system, checkpoint.t, &checkpoint.x, tol);
+        integrator.h = checkpoint.h;
+        integrator.counts = checkpoint.counts;
+        integrator.restart(system);
+        integrator
+    }
+
+    /// What is needed to resume.
+    pub fn checkpoint(&self) -> Checkpoint {
+        Checkpoint {
+            t: self.t,
+            x: self.x.clone(),
+            h: self.h,
+            counts: self.counts,
+        }
+    }
+
+    /// Restarts at the current point after a discontinuity of the inputs.
+    /// The dense output of the last step is kept.
+    pub fn restart<S: SplitSystem + ?Sized>(&mut self, system: &mut S) {
+        if self.end_in_first_stage {
+            std::mem::swap(&mut self.f_end, &mut self.k[0]);
+            self.end_in_first_stage = false;
+        }
+        system.rhs(self.t, &self.x, &mut self.k[0]);
+        self.counts.rhs_evaluations += 1;
+        self.log_error_previous = 1e-4f64.ln();
+    }
+
+    /// One accepted step, not beyond `t_stop`.
+    pub fn step<S: SplitSystem + ?Sized>(
+        &mut self,
+        system: &mut S,
+        t_stop: f64,
+    ) -> Result<(), StepFailure> {
+        const SAFETY: f64 = 0.9;
+        const BETA: f64 = 0.04;
+        const ALPHA: f64 = 0.2 - BETA * 0.75;
+        let mut rejected = false;
+        loop {
+            let Some((h, lands)) = self.tol.next_step(self.t, self.h, t_stop) else {
+                return Err(StepFailure::StepSizeUnderflow {
+                    t: self.t,
+                    h: self.h.min(self.tol.max_step),
+                    non_finite: self.non_finite,
+                });
+            };
+            let mean_square = self.attempt(system, h);
+            if mean_square <= 1.0 {
+                let log_error = 0.5 * mean_square.ln();
+                let factor = if mean_square == 0.0 {
+                    10.0
+                } else {
+                    (SAFETY * (BETA * self.log_error_previous - ALPHA * log_error).exp())
+                        .clamp(0.2, 10.0)
+                };
+                let factor = if rejected { factor.min(1.0) } else { factor };
+                self.log_error_previous = log_error.max(1e-4f64.ln());
+                self.accept(system, h, if lands { t_stop } else { self.t + h });
+                self.h = Tolerances::suggestion_after(self.h, h * factor, lands);
+                return Ok(());
+            }
+            self.counts.rejected += 1;
+            rejected = true;
+            let factor = if mean_square.is_finite() {
+                (SAFETY * (-0.5 * ALPHA * mean_square.ln()).exp()).clamp(0.2, 1.0)
+            } else {
+                0.1
+            };
+            self.h = h * factor;
+        }
+    }
+
+    /// One trial step of size h into `x_new`; the mean square of the scaled
+    /// error estimate. Small systems take a copy of the arithmetic whose
+    /// length is a compile-time constant, as in [`crate::dopri`].
+    fn attempt<S: SplitSystem + ?Sized>(&mut self, system: &mut S, h: f64) -> f64 {
+        match self.n {
+            1 => self.attempt_sized::<1, S>(system, h),
+            2 => self.attempt_sized::<2, S>(system, h),
+            3 => self.attempt_sized::<3, S>(system, h),
+            4 => self.attempt_sized::<4, S>(system, h),
+            5 => self.attempt_sized::<5, S>(system, h),
+            6 => self.attempt_sized::<6, S>(system, h),
+            7 => self.attempt_sized::<7, S>(system, h),
+            8 => self.attempt_sized::<8, S>(system, h),
+            _ => self.attempt_sized::<DYNAMIC, S>(system, h),
+        }
+    }
+
+    /// [`Self::attempt`] over `N` states (`N` = [`DYNAMIC`]: `self.n`).
+    #[inline(always)]
+    fn attempt_sized<const N: usize, S: SplitSystem + ?Sized>(
+        &mut self,
+        system: &mut S,
+        h: f64,
+    ) -> f64 {
+        let (n, t) = (if N == DYNAMIC { self.n } else { N }, self.t);
+        let x = &self.x[..n];
+        let stage = &mut self.stage[..n];
+        for i in 1..STAGES {
+            let (done, rest) = self.k.split_at_mut(i);
+            // Every state by the explicit row, then the implicit states again
+            // by theirs. The newest stage enters last, so the rest is summed
+            // while its evaluation is still in flight.
+            let (older, newest) = done.split_at(i - 1);
+            let newest = &newest[0][..n];
+            stage.fill(0.0);
+            for (j, k) in older.iter().enumerate() {
+                let a = EXPLICIT[i][j];
+                if a != 0.0 {
+                    for (s, k) in stage.iter_mut().zip(&k[..n]) {
+                        *s += a * k;
+                    }
+                }
+            }
+            let a_newest = h * EXPLICIT[i][i - 1];
+            for m in 0..n {
+                stage[m] = (x[m] + h * stage[m]) + a_newest * newest[m];
+            }
+            for &m in &self.implicit_states {
+                let mut sum = 0.0;
+                for (j, k) in older.iter().enumerate() {
+                    sum += IMPLICIT[i][j] * k[m];
+                }
+                stage[m] = (x[m] + h * sum) + (h * IMPLICIT[i][i - 1]) * newest[m];
+            }
+            system.rhs_implicit(t + NODES[i] * h, stage, h * GAMMA, &mut rest[0][..n]);
+        }
+        self.counts.rhs_evaluations += (STAGES - 1) as u64;
+        let x_new = &mut self.x_new[..n];
+        let error = &mut self.error[..n];
+        x_new.fill(0.0);
+        error.fill(0.0);
+        for (j, k) in self.k.iter().enumerate() {
+            let (w, e) = (WEIGHTS[j], WEIGHTS[j] - EMBEDDED[j]);
+            for ((x_new, error), k) in x_new.iter_mut().zip(error.iter_mut()).zip(&k[..n]) {
+                *x_new += w * k;
+                *error += e * k;
+            }
+        }
+        let atol = &self.tol.atol[..n];
+        let mut sum = -0.0;
+        for m in 0..n {
+            x_new[m] = x[m] + h * x_new[m];
+            let scale = atol[m] + self.tol.rtol * x[m].abs().max(x_new[m].abs());
+            let e = h * error[m] / scale;
+            sum += e * e;
+        }
+        // The implicit tableau is stiffly accurate: its solution is its last
+        // stage, which the weights reproduce up to round-off.
+        for &m in &self.implicit_states {
+            x_new[m] = stage[m];
+        }
+        let mean_square = sum / n as f64;
+        if mean_square.is_finite() {
+            self.non_finite = None;
+            mean_square
+        } else {
+            self.non_finite = (0..n).find(|&m| !x_new[m].is_finite());
+            f64::INFINITY
+        }
+    }
+
+    /// Moves to the new point and evaluates f there (the next first stage).
+    fn accept<S: SplitSystem + ?Sized>(&mut self, system: &mut S, h: f64, t_new: f64) {
+        std::mem::swap(&mut self.x_previous, &mut self.x);
+        std::mem::swap(&mut self.x, &mut self.x_new);
+        std::mem::swap(&mut self.f_previous, &mut self.k[0]);
+        self.t_previous = self.t;
+        self.h_previous = h;
+        self.t = t_new;
+        system.rhs(self.t, &self.x, &mut self.k[0]);
+        self.end_in_first_stage = true;
+        self.counts.rhs_evaluations += 1;
+        self.counts.steps += 1;
+    }
+
+    /// The state at `t` inside the last accepted step: cubic Hermite from
+    /// the values and derivatives at both ends.
+    pub fn interpolate(&self, t: f64, out: &mut [f64]) {
+        let h = self.h_previous;
+        let s = if h > 0.0 {
+            ((t - self.t_previous) / h).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        let (h00, h10, h01, h11) = (
+            (1.0 + 2.0 * s) * (1.0 - s) * (1.0 - s),
+            s * (1.0 - s) * (1.0 - s),
+            s * s * (3.0 - 2.0 * s),
+            s * s * (s - 1.0),
+        );
+        let f_end = if self.end_in_first_stage {
+            &self.k[0]
+        } else {
+            &self.f_end
+        };
+        for m in 0..self.n {
+            out[m] = h00 * self.x_previous[m]
+                + h * h10 * self.f_previous[m]
+                + h01 * self.x[m]
+                + h * h11 * f_end[m];
+        }
+    }
+
+    /// Start time of the last accepted step.
+    pub fn previous_time(&self) -> f64 {
+        self.t_previous
+    }
+}
