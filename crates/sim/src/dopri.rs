@@ -3,6 +3,8 @@
 //! extension for dense output. Independent of fistage models: it integrates any
 //! [`OdeSystem`].
 
+use crate::controller::{Judgement, PiController};
+
 /// A system `x' = f(t, x)`.
 pub trait OdeSystem {
     /// Number of states.
@@ -200,7 +202,7 @@ pub struct DormandPrince {
     last_stage_slot: usize,
     t_previous: f64,
     h_previous: f64,
-    log_error_previous: f64,
+    controller: PiController,
     /// Counters.
     pub counts: StepCounts,
     non_finite: Option<usize>,
@@ -238,7 +240,7 @@ impl DormandPrince {
             last_stage_slot: 0,
             t_previous: t0,
             h_previous: 0.0,
-            log_error_previous: 1e-4f64.ln(),
+            controller: PiController::default(),
             counts: StepCounts::default(),
             non_finite: None,
         }
@@ -276,7 +278,7 @@ impl DormandPrince {
         self.k.swap(0, 1);
         self.last_stage_slot = 1;
         self.counts.rhs_evaluations += 1;
-        self.log_error_previous = 1e-4f64.ln();
+        self.controller.reset();
     }
 
     /// Hairer's starting-step heuristic ([`starting_step`]).
@@ -302,9 +304,6 @@ impl DormandPrince {
         system: &mut S,
         t_stop: f64,
     ) -> Result<(), StepFailure> {
-        const SAFETY: f64 = 0.9;
-        const BETA: f64 = 0.04;
-        const ALPHA: f64 = 0.2 - BETA * 0.75;
         let mut rejected = false;
         loop {
             let Some((h, lands)) = self.tol.next_step(self.t, self.h, t_stop) else {
@@ -314,39 +313,23 @@ impl DormandPrince {
                     non_finite: self.non_finite,
                 });
             };
-            // The controller works with ln(error) = ln(mean square) / 2: no
-            // square root on the way from one step to the next.
             let mean_square = self.attempt(system, h);
-            if mean_square <= 1.0 {
-                // ln 0 = -inf is floored below.
-                let log_error = 0.5 * mean_square.ln();
-                let factor = if mean_square == 0.0 {
-                    10.0
-                } else {
-                    let factor =
-                        SAFETY * (BETA * self.log_error_previous - ALPHA * log_error).exp();
-                    factor.clamp(0.2, 10.0)
-                };
-                // After a rejection the step does not grow at once (Hairer's
-                // DOPRI5): a step at the stability limit would fail again.
-                let factor = if rejected { factor.min(1.0) } else { factor };
-                self.log_error_previous = log_error.max(1e-4f64.ln());
-                self.accept(h);
-                if lands {
-                    // Land on the stop time exactly, not on t + (t_stop - t).
-                    self.t = t_stop;
+            match self.controller.judge(mean_square, rejected) {
+                Judgement::Accept { factor } => {
+                    self.accept(h);
+                    if lands {
+                        // Land on the stop time exactly, not on t + (t_stop - t).
+                        self.t = t_stop;
+                    }
+                    self.h = Tolerances::suggestion_after(self.h, h * factor, lands);
+                    return Ok(());
                 }
-                self.h = Tolerances::suggestion_after(self.h, h * factor, lands);
-                return Ok(());
+                Judgement::Reject { factor } => {
+                    self.counts.rejected += 1;
+                    rejected = true;
+                    self.h = h * factor;
+                }
             }
-            self.counts.rejected += 1;
-            rejected = true;
-            let factor = if mean_square.is_finite() {
-                (SAFETY * (-0.5 * ALPHA * mean_square.ln()).exp()).clamp(0.2, 1.0)
-            } else {
-                0.1
-            };
-            self.h = h * factor;
         }
     }
 

@@ -36,6 +36,7 @@
 
 #![warn(missing_docs)]
 
+pub mod controller;
 pub mod cosim;
 pub mod dopri;
 mod driver;

@@ -1,0 +1,91 @@
+//! The implicit-explicit engine (ARK5(4)8L[2]SA, bristles implicit) and the
+//! default engine's choice: imex agrees with the explicit engine and
+//! converges under a tighter tolerance; where the bristle relaxation bounds
+//! the explicit step it takes several times fewer steps; `auto` takes imex
+//! there and the explicit method where the bushings bound the step, and its
+//! run is the chosen engine's, to the bit.
+
+use fistage_model::Loaded;
+use fistage_sim::method::Method;
+use fistage_sim::{AutoEngine, RunOutput, initial_state, run_scenario};
+use fistage_tests::{load, stats};
+
+fn with(loaded: &Loaded, engine: &str, rtol: f64) -> RunOutput {
+    let mut loaded = loaded.clone();
+    loaded.scenario.solver.engine = engine.parse().expect("engine name");
+    loaded.scenario.solver.rtol = rtol;
+    run_scenario(&loaded, &mut fistage_sim::no_progress).expect("run")
+}
+
+/// Largest difference of a signal between two runs on the same grid,
+/// relative to the reference's peak-to-peak over the whole run.
+fn deviation(run: &RunOutput, reference: &RunOutput, signal: &str) -> f64 {
+    let column = |r: &RunOutput| r.signals.column(signal).expect("signal").to_vec();
+    let (a, b) = (column(run), column(reference));
+    assert_eq!(a.len(), b.len());
+    let range = b.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
+        - b.iter().cloned().fold(f64::INFINITY, f64::min);
+    a.iter()
+        .zip(&b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+        / range
+}
+
+fn steps(run: &RunOutput) -> u64 {
+    run.trajectory.stats.counts.steps
+}
+
+#[test]
+fn agrees_with_the_explicit_engine_and_converges() {
+    let loaded = load("scenarios/paper/fig05b_fi.toml");
+    let reference = with(&loaded, "native", 1e-11);
+    let target = stats(&reference, "encoder.position");
+    let mut deviations = Vec::new();
+    for rtol in [1e-6, 1e-8, 1e-10] {
+        let run = with(&loaded, "imex", rtol);
+        let d = deviation(&run, &reference, "encoder.position");
+        let s = stats(&run, "encoder.position");
+        let p2p = (s.peak_to_peak - target.peak_to_peak).abs() / target.peak_to_peak;
+        println!(
+            "imex rtol {rtol:e}: {} steps, deviation {d:.2e} of the range, p2p {p2p:.2e}",
+            steps(&run)
+        );
+        deviations.push(d);
+    }
+    assert!(deviations[1] < 1e-5, "{deviations:?}");
+    assert!(deviations[2] < deviations[1] / 10.0, "{deviations:?}");
+    assert!(deviations[1] < deviations[0], "{deviations:?}");
+}
+
+#[test]
+fn bristle_bound_stages_take_imex_and_bushing_bound_ones_do_not() {
+    // Fig. 6b at 50 mm/s: the FI stage slips throughout, the bristles bound
+    // the explicit step.
+    let slipping = load("scenarios/paper/fig06b_fi_vp50.toml");
+    let choice = |loaded: &Loaded| {
+        let x0 = initial_state(&loaded.model, &loaded.scenario).expect("start");
+        AutoEngine::for_scenario(&loaded.scenario).choice(&loaded.model, &x0)
+    };
+    let picked = choice(&slipping);
+    println!("fig06b_fi_vp50: {}", picked.reason);
+    assert_eq!(picked.method, Method::ImexBristles);
+    let (explicit, imex) = (
+        with(&slipping, "native", 1e-8),
+        with(&slipping, "imex", 1e-8),
+    );
+    println!("steps: native {}, imex {}", steps(&explicit), steps(&imex));
+    assert!(steps(&imex) * 4 < steps(&explicit));
+    let d = deviation(&imex, &explicit, "encoder.position");
+    assert!(d < 1e-5, "imex against native: {d:.2e} of the range");
+    let auto = with(&slipping, "auto", 1e-8);
+    assert_eq!(auto.trajectory.states, imex.trajectory.states);
+    assert_eq!(auto.trajectory.stats.engine, "imex");
+
+    // The four-bearing traverse: its stiff bushings, not the bristles,
+    // bound the explicit step.
+    let traverse = load("scenarios/coupling/friction20_traverse.toml");
+    let picked = choice(&traverse);
+    println!("friction20_traverse: {}", picked.reason);
+    assert_eq!(picked.method, Method::DormandPrince);
+}
