@@ -72,6 +72,11 @@ pub struct BenchArgs {
     /// target/py-venv/bin/python), with a table of CPU-time ratios.
     #[arg(long)]
     pub peers: bool,
+    /// Time one right-hand side of the assembled model against a
+    /// hand-written kernel of the same equations on one-axis stages of 1, 4
+    /// and 8 bearings (5, 14, 26 states), and on the 6-DOF four-bearing stage.
+    #[arg(long)]
+    pub rhs: bool,
     /// Python with FMPy for the FMU table (default: the test environment's,
     /// `target/fmi-venv/bin/python`, else `python3`).
     #[arg(long)]
@@ -194,6 +199,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     }
     if args.stiffness {
         return stiffness_table(args);
+    }
+    if args.rhs {
+        return crate::bench_rhs::rhs_table(args.repeat);
     }
     if args.python_run {
         let python = args.python.clone().unwrap_or_else(|| {

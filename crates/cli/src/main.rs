@@ -8,6 +8,7 @@ mod bench;
 mod bench_fmu;
 mod bench_python;
 mod bench_record;
+mod bench_rhs;
 mod bench_robust;
 mod check;
 mod compare;

@@ -78,6 +78,7 @@ pub mod parameter;
 pub mod reference;
 pub mod robot;
 mod rooted;
+mod rows;
 pub mod rule;
 pub mod scalar;
 pub mod scenario;

@@ -11,6 +11,7 @@ use crate::bristle::BristleStage;
 use crate::elements::{Inputs, Structure};
 use crate::laws::bushing_force;
 use crate::rooted::RootedScratch;
+use crate::rows::{DYNAMIC, DenseRows, RowTable, SparseRows, dot};
 use crate::scalar::Scalar;
 use crate::values::InputValues;
 
@@ -31,7 +32,24 @@ pub(crate) struct TranslationalMap {
     sensor_rows: Vec<f64>,
     sensor_offsets: Vec<f64>,
     actuator_rows: Vec<f64>,
+    /// The same rows as non-zero entries, for models beyond the dense sizes.
+    sparse: Option<Box<Tables<SparseRows>>>,
 }
+
+/// The map's row tables, dense or sparse.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Tables<R> {
+    mass_inverse: R,
+    friction_rows: R,
+    friction_accelerations: R,
+    isolator_rows: R,
+    sensor_rows: R,
+    actuator_rows: R,
+}
+
+/// Degrees of freedom up to which the rows stay dense with a compile-time
+/// length; beyond, they are kept sparse.
+const DENSE_UP_TO: usize = 8;
 
 impl TranslationalMap {
     /// Reads the rows off the general kinematics: velocities are linear in the
@@ -61,6 +79,7 @@ impl TranslationalMap {
             sensor_rows: vec![0.0; ns * nv],
             sensor_offsets: Vec::new(),
             actuator_rows: vec![0.0; na * nv],
+            sparse: None,
         };
         model.evaluate(&zero, &inputs, &mut ws);
         for (k, isolator) in model.isolators.iter().enumerate() {
@@ -69,7 +88,7 @@ impl TranslationalMap {
                 if stiffness != 0.0 || damping != 0.0 {
                     let offset = ws.elements.isolator_deflection[k][axis];
                     map.isolator_axes
-                        .push((stiffness, damping, offset, (3 * k + axis) * nv));
+                        .push((stiffness, damping, offset, 3 * k + axis));
                 }
             }
         }
@@ -109,13 +128,40 @@ impl TranslationalMap {
                 );
             }
         }
+        if nv > DENSE_UP_TO {
+            let sparse = |table: &[f64]| SparseRows::from_dense(table, nv);
+            map.sparse = Some(Box::new(Tables {
+                mass_inverse: sparse(&map.mass_inverse),
+                friction_rows: sparse(&map.friction_rows),
+                friction_accelerations: sparse(&map.friction_accelerations),
+                isolator_rows: sparse(&map.isolator_rows),
+                sensor_rows: sparse(&map.sensor_rows),
+                actuator_rows: sparse(&map.actuator_rows),
+            }));
+        }
         map
     }
 
+    /// The dense tables with rows of `N` entries.
+    #[inline(always)]
+    fn dense<const N: usize>(&self) -> Tables<DenseRows<'_, N>> {
+        let nv = self.nv;
+        let rows = |table| DenseRows::<N> { table, nv };
+        Tables {
+            mass_inverse: rows(&self.mass_inverse),
+            friction_rows: rows(&self.friction_rows),
+            friction_accelerations: rows(&self.friction_accelerations),
+            isolator_rows: rows(&self.isolator_rows),
+            sensor_rows: rows(&self.sensor_rows),
+            actuator_rows: rows(&self.actuator_rows),
+        }
+    }
+
     /// The state derivative; `ws` only supplies scratch space for the
-    /// generalized forces. Models with up to four
-    /// degrees of freedom take a path whose row length is a compile-time
-    /// constant (fully unrolled products); the arithmetic is the same.
+    /// generalized forces. Models with up to [`DENSE_UP_TO`] degrees of
+    /// freedom take dense rows whose length is a compile-time constant (fully
+    /// unrolled products), larger ones their rows' non-zero entries; the
+    /// arithmetic is the same but for the products with zero.
     pub(crate) fn rhs<S: Scalar>(
         &self,
         model: &Structure,
@@ -125,27 +171,42 @@ impl TranslationalMap {
         generalized: &mut [S],
         bristles: &mut BristleStage<S>,
     ) {
-        match self.nv {
-            1 => self.rhs_sized::<1, S>(model, x, inputs, dx, generalized, bristles),
-            2 => self.rhs_sized::<2, S>(model, x, inputs, dx, generalized, bristles),
-            3 => self.rhs_sized::<3, S>(model, x, inputs, dx, generalized, bristles),
-            4 => self.rhs_sized::<4, S>(model, x, inputs, dx, generalized, bristles),
-            _ => self.rhs_sized::<DYNAMIC, S>(model, x, inputs, dx, generalized, bristles),
+        let out = (dx, generalized, bristles);
+        match (&self.sparse, self.nv) {
+            (Some(sparse), _) => {
+                let tables = Tables {
+                    mass_inverse: &sparse.mass_inverse,
+                    friction_rows: &sparse.friction_rows,
+                    friction_accelerations: &sparse.friction_accelerations,
+                    isolator_rows: &sparse.isolator_rows,
+                    sensor_rows: &sparse.sensor_rows,
+                    actuator_rows: &sparse.actuator_rows,
+                };
+                self.rhs_with(&tables, model, x, inputs, out)
+            }
+            (None, 1) => self.rhs_with(&self.dense::<1>(), model, x, inputs, out),
+            (None, 2) => self.rhs_with(&self.dense::<2>(), model, x, inputs, out),
+            (None, 3) => self.rhs_with(&self.dense::<3>(), model, x, inputs, out),
+            (None, 4) => self.rhs_with(&self.dense::<4>(), model, x, inputs, out),
+            (None, 5) => self.rhs_with(&self.dense::<5>(), model, x, inputs, out),
+            (None, 6) => self.rhs_with(&self.dense::<6>(), model, x, inputs, out),
+            (None, 7) => self.rhs_with(&self.dense::<7>(), model, x, inputs, out),
+            (None, 8) => self.rhs_with(&self.dense::<8>(), model, x, inputs, out),
+            (None, _) => self.rhs_with(&self.dense::<DYNAMIC>(), model, x, inputs, out),
         }
     }
 
-    /// [`Self::rhs`] with rows of `N` entries (`N` = [`DYNAMIC`]: `nv`).
+    /// [`Self::rhs`] through one kind of row tables.
     #[inline(always)]
-    fn rhs_sized<const N: usize, S: Scalar>(
+    fn rhs_with<R: RowTable, S: Scalar>(
         &self,
+        tables: &Tables<R>,
         model: &Structure,
         x: &[S],
         inputs: &InputValues<S>,
-        dx: &mut [S],
-        generalized: &mut [S],
-        bristles: &mut BristleStage<S>,
+        (dx, generalized, bristles): (&mut [S], &mut [S], &mut BristleStage<S>),
     ) {
-        let nv = row_length::<N>(self.nv);
+        let nv = tables.mass_inverse.columns();
         let nq = model.layout.nq;
         let (q, v) = (&x[..nq], &x[nq..nq + nv]);
         let (q, v) = (&q[..nv], &v[..nv]);
@@ -154,18 +215,18 @@ impl TranslationalMap {
         for (f, g) in force.iter_mut().zip(&self.gravity[..nv]) {
             *f = S::constant(*g);
         }
-        for &(stiffness, damping, offset, start) in &self.isolator_axes {
-            let row = &self.isolator_rows[start..start + nv];
-            let deflection = S::constant(offset) + dot(row, q);
-            let f = bushing_force(stiffness, damping, deflection, dot(row, v));
-            axpy(f, row, force);
+        for &(stiffness, damping, offset, row) in &self.isolator_axes {
+            let rows = &tables.isolator_rows;
+            let deflection = S::constant(offset) + rows.dot(row, q);
+            let f = bushing_force(stiffness, damping, deflection, rows.dot(row, v));
+            rows.axpy(row, f, force);
         }
         let command = match &model.controller {
             Some(controller) => {
-                let sensor = row::<N>(&self.sensor_rows, nv, controller.sensor);
+                let (sensor, rows) = (controller.sensor, &tables.sensor_rows);
                 let (f, values) = controller.law(
-                    S::constant(self.sensor_offsets[controller.sensor]) + dot(sensor, q),
-                    dot(sensor, v),
+                    S::constant(self.sensor_offsets[sensor]) + rows.dot(sensor, q),
+                    rows.dot(sensor, v),
                     x,
                     inputs,
                 );
@@ -175,62 +236,23 @@ impl TranslationalMap {
             None => S::zero(),
         };
         if let Some(a) = model.servo_actuator() {
-            let actuator = row::<N>(&self.actuator_rows, nv, a);
-            axpy(command + inputs.servo_force, actuator, force);
+            tables
+                .actuator_rows
+                .axpy(a, command + inputs.servo_force, force);
         }
         for i in 0..nv {
-            dx[nq + i] = dot(row::<N>(&self.mass_inverse, nv, i), force);
+            dx[nq + i] = tables.mass_inverse.dot(i, force);
         }
         // Friction last, straight into the accelerations through the
         // precomputed columns of M^-1 J^T: it waits on an exponential, so
         // everything else is summed by the time it is ready.
         for (k, friction) in model.frictions.iter().enumerate() {
-            let slip = dot(row::<N>(&self.friction_rows, nv, k), v) - inputs.platform_velocity;
+            let slip = tables.friction_rows.dot(k, v) - inputs.platform_velocity;
             let (f, z_rate) = bristles.law(k, friction, slip, x[friction.z_index]);
-            let column = row::<N>(&self.friction_accelerations, nv, k);
-            axpy(-f, column, &mut dx[nq..nq + nv]);
+            tables
+                .friction_accelerations
+                .axpy(k, -f, &mut dx[nq..nq + nv]);
             dx[friction.z_index] = z_rate;
         }
-    }
-}
-
-/// Row length marker for "known only at run time".
-const DYNAMIC: usize = 0;
-
-/// The row length: `N`, or `nv` when `N` is [`DYNAMIC`]. With a constant
-/// `N` every slice below has a length the compiler knows.
-#[inline(always)]
-fn row_length<const N: usize>(nv: usize) -> usize {
-    if N == DYNAMIC { nv } else { N }
-}
-
-/// Row `k` of a row-major table with rows of `nv` (= `N` unless dynamic) entries.
-#[inline(always)]
-fn row<const N: usize>(table: &[f64], nv: usize, k: usize) -> &[f64] {
-    let nv = row_length::<N>(nv);
-    &table[k * nv..(k + 1) * nv]
-}
-
-/// `a . b` over `a`'s length, summed in order (index loops over pre-sliced
-/// operands compile to fewer instructions than iterator chains for the
-/// handful of entries these rows have).
-#[inline(always)]
-fn dot<S: Scalar>(a: &[f64], b: &[S]) -> S {
-    let b = &b[..a.len()];
-    // -0.0 is the exact additive identity (+0.0 is not, for -0.0), so the
-    // compiler drops the first addition.
-    let mut sum = S::constant(-0.0);
-    for i in 0..a.len() {
-        sum += b[i] * S::constant(a[i]);
-    }
-    sum
-}
-
-/// `y += alpha x` over `x`'s length.
-#[inline(always)]
-fn axpy<S: Scalar>(alpha: S, x: &[f64], y: &mut [S]) {
-    let y = &mut y[..x.len()];
-    for i in 0..x.len() {
-        y[i] += alpha * S::constant(x[i]);
     }
 }
