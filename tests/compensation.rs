@@ -19,20 +19,46 @@ use fistage_tests::{load_text, run, stats};
 const RIGID: &str = "robots/stage_1dof_rigid.urdf";
 const FI: &str = "robots/stage_1dof_fi.urdf";
 
-/// PD tracking of a 20 mm/s ramp (k = 1e5 N/m, c = 200 N s/m), with
-/// `extra` appended: the steady tracking error, m.
-fn ramp_error(robot: &str, extra: &str) -> f64 {
+/// PD tracking of a 20 mm/s ramp (k = 1e5 N/m, c = 200 N s/m) under
+/// `solver`, with `extra` appended: the tracking error in the window.
+fn ramp_tracking(robot: &str, solver: &str, extra: &str) -> fistage_sim::WindowStats {
     let text = format!(
-        "robot = {robot:?}\nduration = 1.0\n[controller]\nsensor = \"encoder\"\nactuator = \"drive\"\nk = 1e5\nc = 200.0\n\
+        "robot = {robot:?}\nduration = 1.0\n[solver]\n{solver}\n[controller]\nsensor = \"encoder\"\nactuator = \"drive\"\nk = 1e5\nc = 200.0\n\
          [reference]\nkind = \"ramp\"\nvelocity = 0.02\n[statistics]\nwindow = [0.5, 1.0]\n{extra}"
     );
-    let output = run(&load_text(&text));
-    let error = stats(&output, "controller.error");
+    stats(&run(&load_text(&text)), "controller.error")
+}
+
+/// The steady tracking error, m, of [`ramp_tracking`] on the explicit
+/// engine, whose small steps carry an exact feedforward's cancellation to
+/// round-off (the steadiness guard asks for 1e-15 m when the error is zero;
+/// the default engine's residual is integration error at the tolerance, see
+/// `the_residual_of_an_exact_feedforward_falls_with_the_tolerance`).
+fn ramp_error(robot: &str, extra: &str) -> f64 {
+    let error = ramp_tracking(robot, "engine = \"native\"", extra);
     assert!(
         error.peak_to_peak < 1e-3 * error.mean.abs().max(1e-12),
         "not steady: {error:?}"
     );
     error.mean
+}
+
+/// On the default engine an exact feedforward leaves only integration
+/// error: below a millionth of the uncompensated error at the default
+/// tolerance, and falling with the tolerance (100x tighter: at least 30x
+/// smaller).
+#[test]
+fn the_residual_of_an_exact_feedforward_falls_with_the_tolerance() {
+    let bare = ramp_tracking(RIGID, "", "").mean;
+    let exact = "[compensation]\nkind = \"lugre\"\nelement = \"bearing_friction\"\n";
+    let loose = ramp_tracking(RIGID, "rtol = 1e-8", exact);
+    let tight = ramp_tracking(RIGID, "rtol = 1e-10", exact);
+    println!(
+        "uncompensated {bare:.3e} m; exact feedforward rms {:.3e} m at rtol 1e-8, {:.3e} m at 1e-10",
+        loose.rms, tight.rms
+    );
+    assert!(loose.rms < 1e-6 * bare.abs(), "{loose:?} vs {bare}");
+    assert!(tight.rms < loose.rms / 30.0, "{tight:?} vs {loose:?}");
 }
 
 #[test]

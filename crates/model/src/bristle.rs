@@ -3,11 +3,16 @@
 //! implicit-explicit integrator, where the state's entry holds the explicit
 //! part `c` of the stage and the law solves `z = c + step z'(v, z)` exactly
 //! ([`crate::LugreOf::implicit_stage`]). Every evaluation path reads the
-//! bristle law through [`BristleStage::law`], so the two treatments cannot
-//! drift apart.
+//! bristle law through [`BristleStage::law`], and a feedforward
+//! compensator's LuGre model through [`BristleStage::compensator_law`], so
+//! the two treatments cannot drift apart. The compensator's bristle equation
+//! is linear in its state for the reference (or virtual bearing) velocity of
+//! the stage, so it is solved the same way; a Dahl model (nonlinear in its
+//! state for exponents other than 1) stays explicit.
 
 use crate::elements::FrictionContact;
 use crate::scalar::Scalar;
+use crate::servo::FrictionModel;
 
 /// The bristle treatment of one evaluation, kept in the workspace.
 #[derive(Debug, Clone)]
@@ -16,6 +21,8 @@ pub struct BristleStage<S: Scalar = f64> {
     step: f64,
     /// The solved bristle state of each contact (implicit stages only).
     solved: Vec<S>,
+    /// The solved state of a compensator's LuGre model (implicit stages only).
+    compensator: S,
 }
 
 impl<S: Scalar> BristleStage<S> {
@@ -24,6 +31,7 @@ impl<S: Scalar> BristleStage<S> {
         Self {
             step: 0.0,
             solved: vec![S::zero(); contacts],
+            compensator: S::zero(),
         }
     }
 
@@ -44,6 +52,22 @@ impl<S: Scalar> BristleStage<S> {
         }
     }
 
+    /// Force and state rate of a compensator's friction `model` at velocity
+    /// `v`, where `w` is the state's entry (the explicit part of the stage
+    /// for a LuGre model at an implicit stage).
+    #[inline]
+    pub(crate) fn compensator_law(&mut self, model: &FrictionModel, v: S, w: S) -> (S, S) {
+        match model {
+            FrictionModel::Lugre(p) if self.step != 0.0 => {
+                let (force, rate, solved) =
+                    crate::LugreOf::constant(p).implicit_stage(v, w, S::constant(self.step));
+                self.compensator = solved;
+                (force, rate)
+            }
+            _ => model.force_and_rate(v, w),
+        }
+    }
+
     /// Sets the stage's implicit step (0: explicit).
     pub(crate) fn set_step(&mut self, step: f64) {
         self.step = step;
@@ -52,5 +76,11 @@ impl<S: Scalar> BristleStage<S> {
     /// The solved bristle states of the last implicit evaluation, by contact.
     pub(crate) fn solved(&self) -> &[S] {
         &self.solved
+    }
+
+    /// The solved state of the compensator's LuGre model of the last
+    /// implicit evaluation.
+    pub(crate) fn solved_compensator(&self) -> S {
+        self.compensator
     }
 }

@@ -470,7 +470,7 @@ impl Structure {
             ws.elements.sensor_position[k] = point.dot(&axis) - S::constant(sensor.zero_offset);
             ws.elements.sensor_velocity[k] = velocity.dot(&axis);
         }
-        servo_forces(self, x, inputs, &mut ws.elements);
+        servo_forces(self, x, inputs, &mut ws.elements, &mut ws.bristles);
         for (k, actuator) in self.actuators.iter().enumerate() {
             let frame = Frame::Body(actuator.body);
             let (point, _) = point_state(frame, &actuator.point, ws);

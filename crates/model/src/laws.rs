@@ -12,6 +12,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
+use crate::bristle::BristleStage;
 use crate::elements::{RigidBody, Structure};
 use crate::scalar::Scalar;
 use crate::values::{ElementValues, InputValues};
@@ -147,23 +148,26 @@ pub(crate) fn relative_rotation<S: Scalar>(
 }
 
 /// The servo: writes the actuator forces and the tracking error from the
-/// sensor readings already in `elements`. The external servo force input is
-/// added to the controller's actuator (to the first actuator when there is no
-/// controller).
+/// sensor readings already in `elements`, the compensator's model read
+/// through the evaluation's bristle treatment. The external servo force input
+/// is added to the controller's actuator (to the first actuator when there is
+/// no controller).
 #[inline]
 pub(crate) fn servo_forces<S: Scalar>(
     model: &Structure,
     x: &[S],
     inputs: &InputValues<S>,
     elements: &mut ElementValues<S>,
+    bristles: &mut BristleStage<S>,
 ) {
     elements.actuator_force.fill(S::zero());
     if let Some(controller) = &model.controller {
-        let (force, values) = controller.law(
+        let (force, values) = controller.law_at_stage(
             elements.sensor_position[controller.sensor],
             elements.sensor_velocity[controller.sensor],
             x,
             inputs,
+            bristles,
         );
         elements.servo = values;
         elements.actuator_force[controller.actuator] = force;

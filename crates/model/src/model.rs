@@ -139,8 +139,8 @@ impl Model {
     }
 
     /// [`Model::rhs`] at an implicit stage of the bristle states, for
-    /// implicit-explicit integrators: on entry each contact's bristle entry
-    /// of `x` holds the explicit part `c` of the stage, on return the `z`
+    /// implicit-explicit integrators: on entry each bristle entry of `x`
+    /// ([`Model::bristle_states`]) holds the explicit part `c` of the stage, on return the `z`
     /// that solves `z = c + step z'(v, z)` exactly (the bristle equation is
     /// linear in `z` at the stage's slip velocity, which does not depend on
     /// any bristle state); `dx` is the derivative at the solved point.
@@ -159,11 +159,22 @@ impl Model {
         for (contact, z) in self.structure.frictions.iter().zip(ws.bristles.solved()) {
             x[contact.z_index] = *z;
         }
+        if let Some(index) = self.compensator_bristle() {
+            x[index] = ws.bristles.solved_compensator();
+        }
     }
 
-    /// Indices of the bristle states of the LuGre contacts, in contact order.
+    /// Indices of the bristle states: the LuGre contacts' in contact order,
+    /// then a feedforward compensator's LuGre model's.
     pub fn bristle_states(&self) -> Vec<usize> {
-        self.structure.frictions.iter().map(|f| f.z_index).collect()
+        let contacts = self.structure.frictions.iter().map(|f| f.z_index);
+        contacts.chain(self.compensator_bristle()).collect()
+    }
+
+    /// The bristle state of a feedforward compensator's LuGre model.
+    fn compensator_bristle(&self) -> Option<usize> {
+        let controller = self.structure.controller.as_ref()?;
+        controller.feedforward.as_ref()?.bristle_state()
     }
 
     /// State derivative by the general recursive dynamics, for any model and

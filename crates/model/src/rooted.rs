@@ -397,7 +397,7 @@ impl RootedPlan {
         );
         self.body_states(x, dx, scratch);
         self.isolator_forces(model, scratch);
-        self.servo(model, x, inputs, scratch, elements);
+        self.servo(model, x, inputs, scratch, elements, bristles);
         self.friction_forces(model, x, inputs, dx, scratch, bristles);
         self.accelerations(dx, scratch);
         if let Some(controller) = &model.controller {
@@ -625,13 +625,14 @@ impl RootedPlan {
         inputs: &InputValues<S>,
         scratch: &mut RootedScratch<S>,
         elements: &mut ElementValues<S>,
+        bristles: &mut BristleStage<S>,
     ) {
         for (k, sensor) in self.sensors.iter().enumerate() {
             let (position, velocity, _) = Self::reading(sensor, scratch);
             elements.sensor_position[k] = position;
             elements.sensor_velocity[k] = velocity;
         }
-        servo_forces(model, x, inputs, elements);
+        servo_forces(model, x, inputs, elements, bristles);
         for (actuator, force) in self.actuators.iter().zip(&elements.actuator_force) {
             if !force.is_exactly_zero() {
                 let (_, _, arm) = Self::reading(actuator, scratch);

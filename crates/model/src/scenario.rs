@@ -179,9 +179,9 @@ impl ControllerSettings {
 pub enum EngineKind {
     /// The cheapest sound adaptive method for the model, chosen before the
     /// run from its linearisation: `native` or `imex` (what `fistage check` shows).
+    #[default]
     Auto,
     /// Error-controlled explicit Dormand-Prince 5(4) (also `dopri5`).
-    #[default]
     #[serde(alias = "dopri5")]
     Native,
     /// Linearly implicit Rosenbrock-W ROS34PW2 with the exact Jacobian (also `implicit`).

@@ -23,6 +23,7 @@
 //! `eta' = -omega (f + d_hat) = -omega u_c`. A constant disturbance is
 //! rejected exactly in steady state (`u_c` integrates to zero).
 
+use crate::bristle::BristleStage;
 use crate::dahl::DahlParams;
 use crate::elements::{Controller, StateKind};
 use crate::lugre::LugreParams;
@@ -177,22 +178,35 @@ impl Feedforward {
         if self.bearing.is_some() { 3 } else { 1 }
     }
 
+    /// The index of its LuGre model's bristle state, which an
+    /// implicit-explicit integrator may treat implicitly (none for Dahl).
+    pub fn bristle_state(&self) -> Option<usize> {
+        match self.model {
+            FrictionModel::Lugre(_) => Some(self.state_index + self.n_states() - 1),
+            FrictionModel::Dahl(_) => None,
+        }
+    }
+
     /// Its force and the rates of its states (unused entries zero).
     #[inline(always)]
-    fn force_and_rates<S: Scalar>(&self, x: &[S], inputs: &InputValues<S>) -> (S, [S; 3]) {
+    fn force_and_rates<S: Scalar>(
+        &self,
+        x: &[S],
+        inputs: &InputValues<S>,
+        bristles: &mut BristleStage<S>,
+    ) -> (S, [S; 3]) {
         let i = self.state_index;
         let v_r = inputs.reference_velocity;
         match &self.bearing {
             None => {
-                let (force, rate) = self.model.force_and_rate(v_r, x[i]);
+                let (force, rate) = bristles.compensator_law(&self.model, v_r, x[i]);
                 (force, [rate, S::zero(), S::zero()])
             }
             Some(bearing) => {
                 let (deflection, velocity, w) = (x[i], x[i + 1], x[i + 2]);
                 let deflection_rate = v_r - velocity;
-                let (friction, w_rate) = self
-                    .model
-                    .force_and_rate(velocity - inputs.platform_velocity, w);
+                let slip = velocity - inputs.platform_velocity;
+                let (friction, w_rate) = bristles.compensator_law(&self.model, slip, w);
                 let pull = S::constant(bearing.stiffness) * deflection
                     + S::constant(bearing.damping) * deflection_rate;
                 let acceleration = (pull - friction) * S::constant(1.0 / bearing.mass);
@@ -269,6 +283,26 @@ impl Controller {
         x: &[S],
         inputs: &InputValues<S>,
     ) -> (S, ServoValues<S>) {
+        self.law_at_stage(
+            position,
+            velocity,
+            x,
+            inputs,
+            &mut BristleStage::explicit(0),
+        )
+    }
+
+    /// [`Controller::law`] with the compensator's model read through the
+    /// evaluation's bristle treatment (see [`BristleStage::compensator_law`]).
+    #[inline(always)]
+    pub(crate) fn law_at_stage<S: Scalar>(
+        &self,
+        position: S,
+        velocity: S,
+        x: &[S],
+        inputs: &InputValues<S>,
+        bristles: &mut BristleStage<S>,
+    ) -> (S, ServoValues<S>) {
         let error = position - inputs.reference_position;
         let error_rate = velocity - inputs.reference_velocity;
         let integral = self.integral_index.map_or(S::zero(), |i| x[i]);
@@ -279,7 +313,7 @@ impl Controller {
             + S::constant(self.c) * error_rate
             + S::constant(self.k_i) * integral);
         if let Some(feedforward) = &self.feedforward {
-            let (force, rates) = feedforward.force_and_rates(x, inputs);
+            let (force, rates) = feedforward.force_and_rates(x, inputs, bristles);
             values.feedforward = force;
             values.rates[1..4].copy_from_slice(&rates);
             command += force;

@@ -224,11 +224,12 @@ impl TranslationalMap {
         let command = match &model.controller {
             Some(controller) => {
                 let (sensor, rows) = (controller.sensor, &tables.sensor_rows);
-                let (f, values) = controller.law(
+                let (f, values) = controller.law_at_stage(
                     S::constant(self.sensor_offsets[sensor]) + rows.dot(sensor, q),
                     rows.dot(sensor, v),
                     x,
                     inputs,
+                    bristles,
                 );
                 controller.write_rates(&values, dx);
                 f
