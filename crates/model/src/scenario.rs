@@ -187,7 +187,7 @@ pub enum EngineKind {
     /// Linearly implicit Rosenbrock-W ROS34PW2 with the exact Jacobian (also `implicit`).
     #[serde(alias = "implicit")]
     Rosenbrock,
-    /// Additive Runge-Kutta ARK5(4)8L[2]SA, the bristle states implicit (also `ark548`).
+    /// Additive Runge-Kutta `ARK5(4)8L[2]SA`, the bristle states implicit (also `ark548`).
     #[serde(alias = "ark548")]
     Imex,
     /// rapier3d-f64 with a fixed step, under the model's own force elements.

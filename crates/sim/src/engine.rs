@@ -182,7 +182,7 @@ impl Engine for AutoEngine {
     }
 }
 
-/// The implicit-explicit engine: Kennedy and Carpenter's ARK5(4)8L[2]SA
+/// The implicit-explicit engine: Kennedy and Carpenter's `ARK5(4)8L[2]SA`
 /// with the bristle states implicit (solved exactly at each stage) and
 /// everything else explicit, for stages whose bristle relaxation, not
 /// accuracy, bounds the explicit step.

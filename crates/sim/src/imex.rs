@@ -1,4 +1,4 @@
-//! Kennedy and Carpenter's additive Runge-Kutta pair ARK5(4)8L[2]SA
+//! Kennedy and Carpenter's additive Runge-Kutta pair `ARK5(4)8L[2]SA`
 //! (Appl. Numer. Math. 44, 2003): an explicit tableau for most states and an
 //! L-stable, stiffly accurate singly diagonally implicit tableau (first stage
 //! explicit) for the states a [`SplitSystem`] names implicit, the bristle

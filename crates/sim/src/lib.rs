@@ -5,11 +5,14 @@
 //! [`Engine`], which returns a [`Trajectory`]; [`Trajectory::signals`] turns it
 //! into named output signals, [`metrics::summarize`] into statistics.
 //!
-//! - **Engines** ([`engine_for`] picks the scenario's): [`NativeEngine`], an
-//!   error-controlled Dormand-Prince 5(4) with dense output;
-//!   [`RosenbrockEngine`], linearly implicit with the model's exact Jacobian,
+//! - **Engines** ([`engine_for`] picks the scenario's): [`AutoEngine`], the
+//!   default, which takes the implicit-explicit method where the bristles
+//!   bound the explicit step and Dormand-Prince elsewhere; [`NativeEngine`], an
+//!   error-controlled Dormand-Prince 5(4) with dense output; [`ImexEngine`],
+//!   the additive Runge-Kutta pair with the bristle states solved exactly at
+//!   each stage; [`RosenbrockEngine`], linearly implicit with the model's exact Jacobian,
 //!   for very stiff isolators; [`RapierEngine`], rapier3d-f64 under the
-//!   model's own force elements, for end stops and loose payloads. The two
+//!   model's own force elements, for end stops and loose payloads. The
 //!   adaptive engines and the co-simulation [`Stepper`] share one driver:
 //!   segments between the inputs' discontinuities, the step budget and the
 //!   failure reporting are written once.

@@ -1,6 +1,6 @@
 //! Which integration method the default engine (`auto`) takes for a model,
 //! decided once from the model's linearisation before a run: the explicit
-//! Dormand-Prince 5(4), or the implicit-explicit ARK5(4)8L[2]SA with the
+//! Dormand-Prince 5(4), or the implicit-explicit `ARK5(4)8L[2]SA` with the
 //! bristle states implicit (see [`crate::imex`]).
 //!
 //! The explicit step is bounded by the spectral radius of the Jacobian; the
@@ -26,7 +26,7 @@ pub const REQUIRED_GAIN: f64 = 4.0;
 pub enum Method {
     /// Explicit Dormand-Prince 5(4).
     DormandPrince,
-    /// ARK5(4)8L[2]SA, the bristle states implicit.
+    /// `ARK5(4)8L[2]SA`, the bristle states implicit.
     ImexBristles,
 }
 

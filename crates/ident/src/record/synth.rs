@@ -1,5 +1,5 @@
 //! Seeded lab-style records from known parameters: the
-//! [`lab_program`](super::program::lab_program) through the plant at a tight
+//! [`lab_program`] through the plant at a tight
 //! tolerance, with what a lab adds: encoder quantisation, position noise,
 //! and an unmeasured force disturbance (low-pass filtered noise, acting on
 //! the stage but absent from the recorded force). The sensor errors and the
