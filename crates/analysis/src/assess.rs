@@ -116,6 +116,9 @@ impl Assessment {
 /// Evaluates `evaluate(index)` for every index on `threads` threads, in
 /// index order; `done` is called with each result as it finishes (from
 /// worker threads, in completion order) and the count finished so far.
+/// Items are handed out one at a time: their costs differ (a run still
+/// decaying is extended), and a thread that finishes early must be able to
+/// take any item not yet started, not only a whole block of them.
 pub fn in_parallel<T: Send>(
     indices: &[usize],
     threads: usize,
@@ -126,6 +129,7 @@ pub fn in_parallel<T: Send>(
     let work = || {
         indices
             .par_iter()
+            .with_max_len(1)
             .map(|&index| {
                 let result = evaluate(index);
                 let finished = counter.fetch_add(1, Ordering::Relaxed) + 1;

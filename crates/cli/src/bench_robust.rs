@@ -1,15 +1,21 @@
 //! `fistage bench --robust`: the cost of a tolerance analysis of the
 //! four-bearing stage (`scenarios/robust/four_bearing_population.toml`):
-//! 10 000 linear samples and 1 000 simulated 2 s samples, each on one and on
-//! two threads, side by side. Samples are computed as `fistage robust`
-//! computes them, without writing files.
+//! 10 000 linear samples and 1 000 simulated 2 s samples, and of the
+//! simulated 40 x 40 stability sweep of `scenarios/bench/fig06b_40x40.toml`,
+//! each on one and on two threads, side by side. Samples and points are
+//! computed as `fistage robust` and `fistage sweep` compute them, without
+//! writing files.
 
 use std::path::Path;
 use std::time::Instant;
 
 use fistage_analysis::assess::Analyses;
 use fistage_analysis::robust::RobustSpec;
+use fistage_analysis::sweep::{SweepSpec, run_points};
 use fistage_model::RobotSpec;
+
+/// The sweep timed after the tolerance analysis.
+const SWEEP: &str = "scenarios/bench/fig06b_40x40.toml";
 
 /// One timed case: (label, samples, analysis, simulated duration).
 const CASES: [(&str, usize, Analyses, Option<f64>); 2] = [
@@ -49,11 +55,37 @@ pub fn robust_table(scenario: &Path) -> anyhow::Result<()> {
             first == second,
             "one and two threads gave different samples"
         );
-        println!(
-            "| {samples} | {label} | {one:.2} | {two:.2} | {:.2} | {:.0} |",
-            one / two,
-            samples as f64 / two
-        );
+        print_row(samples, label, one, two);
     }
+    sweep_row(Path::new(SWEEP))
+}
+
+fn print_row(items: usize, label: &str, one: f64, two: f64) {
+    println!(
+        "| {items} | {label} | {one:.2} | {two:.2} | {:.2} | {:.0} |",
+        one / two,
+        items as f64 / two
+    );
+}
+
+/// The sweep's points on one and on two threads.
+fn sweep_row(scenario: &Path) -> anyhow::Result<()> {
+    let loaded = fistage_model::load(scenario)?;
+    let robot_file = RobotSpec::from_file(&loaded.scenario.robot)?;
+    let spec = SweepSpec::from_scenario(&loaded.scenario)?;
+    let indices: Vec<usize> = (0..spec.len()).collect();
+    let time = |threads: usize| {
+        let start = Instant::now();
+        let results = run_points(&loaded, &robot_file, &spec, &indices, threads, &|_, _| {});
+        (start.elapsed().as_secs_f64(), results)
+    };
+    let (one, first) = time(1);
+    let (two, second) = time(2);
+    anyhow::ensure!(
+        first == second,
+        "one and two threads gave different sweep points"
+    );
+    let label = format!("sweep `{}`", scenario.display());
+    print_row(spec.len(), &label, one, two);
     Ok(())
 }
