@@ -7,30 +7,8 @@
 
 use fistage_model::Loaded;
 use fistage_sim::method::Method;
-use fistage_sim::{AutoEngine, RunOutput, initial_state, run_scenario};
-use fistage_tests::{load, stats};
-
-fn with(loaded: &Loaded, engine: &str, rtol: f64) -> RunOutput {
-    let mut loaded = loaded.clone();
-    loaded.scenario.solver.engine = engine.parse().expect("engine name");
-    loaded.scenario.solver.rtol = rtol;
-    run_scenario(&loaded, &mut fistage_sim::no_progress).expect("run")
-}
-
-/// Largest difference of a signal between two runs on the same grid,
-/// relative to the reference's peak-to-peak over the whole run.
-fn deviation(run: &RunOutput, reference: &RunOutput, signal: &str) -> f64 {
-    let column = |r: &RunOutput| r.signals.column(signal).expect("signal").to_vec();
-    let (a, b) = (column(run), column(reference));
-    assert_eq!(a.len(), b.len());
-    let range = b.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
-        - b.iter().cloned().fold(f64::INFINITY, f64::min);
-    a.iter()
-        .zip(&b)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max)
-        / range
-}
+use fistage_sim::{AutoEngine, RunOutput, initial_state};
+use fistage_tests::{deviation, load, run_with as with, stats};
 
 fn steps(run: &RunOutput) -> u64 {
     run.trajectory.stats.counts.steps

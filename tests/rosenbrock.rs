@@ -4,15 +4,8 @@
 //! the explicit engine's step count explodes.
 
 use fistage_model::{Loaded, assemble};
-use fistage_sim::{RunOutput, run_scenario};
-use fistage_tests::{load, stats};
-
-fn with(loaded: &Loaded, engine: &str, rtol: f64) -> RunOutput {
-    let mut loaded = loaded.clone();
-    loaded.scenario.solver.engine = engine.parse().expect("engine name");
-    loaded.scenario.solver.rtol = rtol;
-    run_scenario(&loaded, &mut fistage_sim::no_progress).expect("run")
-}
+use fistage_sim::RunOutput;
+use fistage_tests::{load, run_with as with, stats};
 
 fn relative(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs()

@@ -41,6 +41,29 @@ pub fn run(loaded: &Loaded) -> RunOutput {
         .unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// Runs a loaded scenario on the engine named `engine` at `rtol`.
+pub fn run_with(loaded: &Loaded, engine: &str, rtol: f64) -> RunOutput {
+    let mut loaded = loaded.clone();
+    loaded.scenario.solver.engine = engine.parse().expect("engine name");
+    loaded.scenario.solver.rtol = rtol;
+    run(&loaded)
+}
+
+/// Largest difference of a signal between two runs on the same grid,
+/// relative to the reference's range over the whole run.
+pub fn deviation(run: &RunOutput, reference: &RunOutput, signal: &str) -> f64 {
+    let column = |r: &RunOutput| r.signals.column(signal).expect("signal").to_vec();
+    let (a, b) = (column(run), column(reference));
+    assert_eq!(a.len(), b.len());
+    let range = b.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
+        - b.iter().cloned().fold(f64::INFINITY, f64::min);
+    a.iter()
+        .zip(&b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+        / range
+}
+
 /// Steady-state peak-to-peak of a signal in a run.
 pub fn peak_to_peak(output: &RunOutput, signal: &str) -> f64 {
     stats(output, signal).peak_to_peak

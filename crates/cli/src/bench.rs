@@ -31,7 +31,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 21)]
     pub repeat: usize,
     /// Engines to time instead of the scenario's own (comma-separated:
-    /// native, imex, rosenbrock), each in its own rows of the table.
+    /// auto, native, imex, dop853, rosenbrock), each in its own rows of the table.
     #[arg(long, value_delimiter = ',')]
     pub engine: Vec<String>,
     /// Signal whose error is reported.
@@ -52,7 +52,8 @@ pub struct BenchArgs {
     pub stiffness: bool,
     /// Time a tolerance analysis of the four-bearing stage (or of
     /// `--scenario`, which needs a [robust] table): 10 000 linear and 1 000
-    /// simulated 2 s samples on one and two threads.
+    /// simulated 2 s samples, then the 40 x 40 simulated sweep of
+    /// `scenarios/bench/fig06b_40x40.toml`, on one and two threads.
     #[arg(long)]
     pub robust: bool,
     /// Time the Python package's `Scenario.run()` against the program on
@@ -345,8 +346,10 @@ fn engine_table(args: &BenchArgs, scenario: &Path, rtols: &[f64]) -> anyhow::Res
         args.engine
             .iter()
             .map(|name| {
-                fistage_sim::engine_by_name(name)
-                    .with_context(|| format!("--engine: no engine \"{name}\""))
+                let kind: fistage_model::EngineKind = name
+                    .parse()
+                    .map_err(|e: String| anyhow::anyhow!("--engine: {e}"))?;
+                Ok(fistage_sim::engine_in(&loaded.scenario, kind))
             })
             .collect::<anyhow::Result<_>>()?
     };

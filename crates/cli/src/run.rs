@@ -27,7 +27,8 @@ pub struct RunArgs {
     /// Skip the plots.
     #[arg(long)]
     pub no_plots: bool,
-    /// Engine to use instead of the scenario's (`native`, `rosenbrock` or `rapier`).
+    /// Engine to use instead of the scenario's (`auto`, `native`, `imex`,
+    /// `dop853`, `rosenbrock` or `rapier`).
     #[arg(long)]
     pub engine: Option<EngineKind>,
     /// Fixed step of the rapier engine, s (instead of `rapier.dt`).

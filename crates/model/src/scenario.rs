@@ -190,17 +190,20 @@ pub enum EngineKind {
     /// Additive Runge-Kutta `ARK5(4)8L[2]SA`, the bristle states implicit (also `ark548`).
     #[serde(alias = "ark548")]
     Imex,
+    /// Explicit eighth-order Dormand-Prince pair DOP853, for tight tolerances.
+    Dop853,
     /// rapier3d-f64 with a fixed step, under the model's own force elements.
     Rapier,
 }
 
 impl EngineKind {
     /// Every engine, in the order help texts list them.
-    pub const ALL: [EngineKind; 5] = [
+    pub const ALL: [EngineKind; 6] = [
         EngineKind::Auto,
         EngineKind::Native,
         EngineKind::Rosenbrock,
         EngineKind::Imex,
+        EngineKind::Dop853,
         EngineKind::Rapier,
     ];
 
@@ -211,6 +214,7 @@ impl EngineKind {
             EngineKind::Native => "native",
             EngineKind::Rosenbrock => "rosenbrock",
             EngineKind::Imex => "imex",
+            EngineKind::Dop853 => "dop853",
             EngineKind::Rapier => "rapier",
         }
     }
@@ -237,6 +241,7 @@ impl std::str::FromStr for EngineKind {
             "native" | "dopri5" => Ok(EngineKind::Native),
             "rosenbrock" | "implicit" => Ok(EngineKind::Rosenbrock),
             "imex" | "ark548" => Ok(EngineKind::Imex),
+            "dop853" => Ok(EngineKind::Dop853),
             "rapier" => Ok(EngineKind::Rapier),
             other => Err(format!(
                 "unknown engine \"{other}\" (available: {})",

@@ -1,12 +1,46 @@
-//! The step-size controller of the embedded fifth-order pairs (Dormand-Prince
-//! and the implicit-explicit pair): a PI controller on the logarithm of the
-//! scaled error norm (Gustafsson; the constants of Hairer's DOPRI5), so the
-//! way from one step's error to the next step's size is written once.
+//! The step-size controller of the embedded Runge-Kutta pairs (Dormand-Prince
+//! 5(4), the implicit-explicit pair, DOP853): a PI controller on the
+//! logarithm of the scaled error norm (Gustafsson), with the gains of
+//! Hairer's DOPRI5 for the fifth-order pairs and of his DOP853 for the
+//! eighth-order one, so the way from one step's error to the next step's
+//! size is written once.
 
 /// Controller state: the logarithm of the last accepted step's error norm.
 #[derive(Debug, Clone, Copy)]
 pub struct PiController {
     log_error_previous: f64,
+    gains: Gains,
+}
+
+/// The gains and bounds of a controller, by the order of the method.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Gains {
+    /// Exponent of the current error norm.
+    alpha: f64,
+    /// Exponent of the previous accepted step's error norm.
+    beta: f64,
+    /// Smallest factor of the step size, accepted or rejected.
+    smallest: f64,
+    /// Largest growth factor after an accepted step.
+    largest: f64,
+}
+
+impl Gains {
+    /// Fifth-order pairs (Hairer's DOPRI5: beta 0.04, factors 0.2 to 10).
+    pub const FIFTH_ORDER: Self = Self {
+        alpha: ALPHA,
+        beta: BETA,
+        smallest: 0.2,
+        largest: 10.0,
+    };
+    /// Eighth-order pairs (Hairer's DOP853 defaults: an integral controller
+    /// with exponent 1/8, factors 1/3 to 6).
+    pub const EIGHTH_ORDER: Self = Self {
+        alpha: 1.0 / 8.0,
+        beta: 0.0,
+        smallest: 1.0 / 3.0,
+        largest: 6.0,
+    };
 }
 
 /// What the controller makes of one trial step.
@@ -35,16 +69,22 @@ const LOG_ERROR_FLOOR: f64 = -9.210_340_371_976_184; // ln 1e-4
 
 impl Default for PiController {
     fn default() -> Self {
-        Self {
-            log_error_previous: LOG_ERROR_FLOOR,
-        }
+        Self::with_gains(Gains::FIFTH_ORDER)
     }
 }
 
 impl PiController {
+    /// A controller with `gains` and no history.
+    pub fn with_gains(gains: Gains) -> Self {
+        Self {
+            log_error_previous: LOG_ERROR_FLOOR,
+            gains,
+        }
+    }
+
     /// Forgets the history, as after a discontinuity of the inputs.
     pub fn reset(&mut self) {
-        *self = Self::default();
+        *self = Self::with_gains(self.gains);
     }
 
     /// Judges a trial step from the mean square of its scaled error estimate
@@ -52,14 +92,20 @@ impl PiController {
     /// rejection within the same step the step does not grow at once: a step
     /// at the stability limit would fail again.
     pub fn judge(&mut self, mean_square: f64, after_rejection: bool) -> Judgement {
+        let Gains {
+            alpha,
+            beta,
+            smallest,
+            largest,
+        } = self.gains;
         if mean_square <= 1.0 {
             // ln 0 = -inf is floored below.
             let log_error = 0.5 * mean_square.ln();
             let factor = if mean_square == 0.0 {
-                10.0
+                largest
             } else {
-                (SAFETY * (BETA * self.log_error_previous - ALPHA * log_error).exp())
-                    .clamp(0.2, 10.0)
+                (SAFETY * (beta * self.log_error_previous - alpha * log_error).exp())
+                    .clamp(smallest, largest)
             };
             let factor = if after_rejection {
                 factor.min(1.0)
@@ -70,7 +116,7 @@ impl PiController {
             Judgement::Accept { factor }
         } else if mean_square.is_finite() {
             Judgement::Reject {
-                factor: (SAFETY * (-0.5 * ALPHA * mean_square.ln()).exp()).clamp(0.2, 1.0),
+                factor: (SAFETY * (-0.5 * alpha * mean_square.ln()).exp()).clamp(smallest, 1.0),
             }
         } else {
             Judgement::Reject { factor: 0.1 }

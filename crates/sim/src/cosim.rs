@@ -127,7 +127,7 @@ impl Stepper {
             &mut system,
             t_end,
             t.max_steps_per_advance,
-            |_| std::ops::ControlFlow::Continue(()),
+            |_, _| std::ops::ControlFlow::Continue(()),
         )?;
         if let Some(i) = integrator.x.iter().position(|v| !v.is_finite()) {
             return Err(SimError::StepSizeUnderflow {

@@ -89,15 +89,17 @@ impl Tolerances {
     }
 }
 
-/// Hairer's starting-step heuristic for a method of order 5 from (t, x) with
-/// f(t, x) = `f0`: the step and the evaluations it took (one). `stage` and
-/// `f1` are scratch space of the state's length.
+/// Hairer's starting-step heuristic for a method of order `order` from
+/// (t, x) with f(t, x) = `f0`: the step and the evaluations it took (one).
+/// `stage` and `f1` are scratch space of the state's length.
+#[allow(clippy::too_many_arguments)]
 pub fn starting_step<S: OdeSystem + ?Sized>(
     system: &mut S,
     t: f64,
     x: &[f64],
     f0: &[f64],
     tol: &Tolerances,
+    order: f64,
     stage: &mut [f64],
     f1: &mut [f64],
 ) -> (f64, u64) {
@@ -130,7 +132,7 @@ pub fn starting_step<S: OdeSystem + ?Sized>(
     let h1 = if d1.max(d2) <= 1e-15 {
         (h0 * 1e-3).max(1e-6)
     } else {
-        (0.01 / d1.max(d2)).powf(0.2)
+        (0.01 / d1.max(d2)).powf(1.0 / order)
     };
     ((100.0 * h0).min(h1).min(tol.max_step), 1)
 }
@@ -290,6 +292,7 @@ impl DormandPrince {
             &self.x,
             &k0[0],
             &self.tol,
+            5.0,
             &mut self.stage,
             &mut rest[0],
         );

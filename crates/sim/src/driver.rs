@@ -8,6 +8,7 @@
 use fistage_model::{InputValues, Model, Workspace};
 use std::ops::ControlFlow;
 
+use crate::dop853::Dop853;
 use crate::dopri::{DormandPrince, OdeSystem, StepCounts, StepFailure, Tolerances};
 use crate::excitation::Excitation;
 use crate::imex::{ImexRungeKutta, SplitSystem};
@@ -111,8 +112,9 @@ pub(crate) trait Integrating {
     fn advance(&mut self, system: &mut ModelSystem, t_stop: f64) -> Result<(), StepFailure>;
     /// Forget the history: the inputs jumped.
     fn restart(&mut self, system: &mut ModelSystem);
-    /// The solution at `t` inside the last step.
-    fn interpolate(&self, t: f64, out: &mut [f64]);
+    /// The solution at `t` inside the last step (an integrator may
+    /// evaluate the system to form it).
+    fn interpolate(&mut self, system: &mut ModelSystem, t: f64, out: &mut [f64]);
     /// Steps, rejections and evaluations so far.
     fn counts(&self) -> StepCounts;
 }
@@ -134,7 +136,7 @@ macro_rules! integrating {
             fn restart(&mut self, system: &mut ModelSystem) {
                 <$integrator>::restart(self, system);
             }
-            fn interpolate(&self, t: f64, out: &mut [f64]) {
+            fn interpolate(&mut self, _system: &mut ModelSystem, t: f64, out: &mut [f64]) {
                 <$integrator>::interpolate(self, t, out);
             }
             fn counts(&self) -> StepCounts {
@@ -147,6 +149,24 @@ macro_rules! integrating {
 integrating!(DormandPrince);
 integrating!(ImexRungeKutta);
 integrating!(Rosenbrock);
+
+impl Integrating for Dop853 {
+    fn time(&self) -> f64 {
+        self.t
+    }
+    fn advance(&mut self, system: &mut ModelSystem, t_stop: f64) -> Result<(), StepFailure> {
+        self.step(system, t_stop)
+    }
+    fn restart(&mut self, system: &mut ModelSystem) {
+        Dop853::restart(self, system);
+    }
+    fn interpolate(&mut self, system: &mut ModelSystem, t: f64, out: &mut [f64]) {
+        Dop853::interpolate(self, system, t, out);
+    }
+    fn counts(&self) -> StepCounts {
+        self.counts
+    }
+}
 
 /// The ends of the segments from `t0` to `t_end`: the breakpoints strictly
 /// inside, sorted and without repeats, then `t_end`.
@@ -181,7 +201,7 @@ pub(crate) fn drive<I: Integrating>(
     system: &mut ModelSystem,
     t_end: f64,
     max_steps: u64,
-    mut after_step: impl FnMut(&I) -> ControlFlow<()>,
+    mut after_step: impl FnMut(&mut I, &mut ModelSystem) -> ControlFlow<()>,
 ) -> Result<(), SimError> {
     let model = system.model;
     let ends = segment_ends(system.excitation.breakpoints(), integrator.time(), t_end);
@@ -207,7 +227,7 @@ pub(crate) fn drive<I: Integrating>(
                 });
             }
             pace.check(integrator.time(), steps, t_end, max_steps)?;
-            if after_step(integrator).is_break() {
+            if after_step(integrator, system).is_break() {
                 return Err(SimError::Cancelled {
                     t: integrator.time(),
                 });

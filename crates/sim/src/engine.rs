@@ -1,8 +1,9 @@
 //! Engines integrate a [`Model`] driven by an [`Excitation`] and return a
 //! [`Trajectory`] sampled on a uniform grid. The native engine is the
-//! error-controlled Dormand-Prince 5(4) of [`crate::dopri`], the Rosenbrock
-//! engine the linearly implicit method of [`crate::rosenbrock`]; both step
-//! through the one driver of driver (module `driver`). Which engine runs is an
+//! error-controlled Dormand-Prince 5(4) of [`crate::dopri`], the imex engine
+//! the pair of [`crate::imex`], the dop853 engine the eighth-order pair of
+//! [`crate::dop853`], the Rosenbrock engine the linearly implicit method of
+//! [`crate::rosenbrock`]; all step through the one driver (module `driver`). Which engine runs is an
 //! [`EngineKind`], checked when the scenario is read.
 
 use std::ops::ControlFlow;
@@ -10,6 +11,7 @@ use std::time::Instant;
 
 use fistage_model::{EngineKind, Inputs, Model, Scenario};
 
+use crate::dop853::Dop853;
 use crate::dopri::{DormandPrince, Tolerances};
 use crate::driver::{Integrating, ModelSystem, drive, tolerances};
 use crate::excitation::Excitation;
@@ -81,11 +83,11 @@ fn integrate<I: Integrating>(
         &mut system,
         settings.t_end,
         settings.max_steps,
-        |integrator| {
+        |integrator, system| {
             while next_sample < times.len()
                 && times[next_sample] <= integrator.time() * (1.0 + 1e-14)
             {
-                integrator.interpolate(times[next_sample], &mut buffer);
+                integrator.interpolate(system, times[next_sample], &mut buffer);
                 trajectory.push(times[next_sample], &buffer);
                 next_sample += 1;
             }
@@ -211,6 +213,38 @@ impl Engine for ImexEngine {
             settings,
             progress,
             |system| ImexRungeKutta::new(system, 0.0, x0, tol),
+        )
+    }
+}
+
+/// The explicit eighth-order engine DOP853 (Prince and Dormand's pair in
+/// Hairer's form, [`crate::dop853`]), for tight tolerances where the
+/// fifth-order step is held by accuracy, not stability.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Dop853Engine;
+
+impl Engine for Dop853Engine {
+    fn kind(&self) -> EngineKind {
+        EngineKind::Dop853
+    }
+
+    fn simulate(
+        &self,
+        model: &Model,
+        x0: &[f64],
+        excitation: &dyn Excitation,
+        settings: &SimSettings,
+        progress: &mut Progress<'_>,
+    ) -> Result<Trajectory, SimError> {
+        let tol = settings_tolerances(model, settings);
+        integrate(
+            self.kind(),
+            model,
+            x0,
+            excitation,
+            settings,
+            progress,
+            |system| Dop853::new(system, 0.0, x0, tol),
         )
     }
 }

@@ -243,6 +243,7 @@ impl ImexRungeKutta {
             &integrator.x,
             &integrator.k[0],
             &integrator.tol,
+            5.0,
             &mut integrator.stage,
             &mut integrator.x_new,
         );

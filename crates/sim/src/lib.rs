@@ -10,7 +10,10 @@
 //!   bound the explicit step and Dormand-Prince elsewhere; [`NativeEngine`], an
 //!   error-controlled Dormand-Prince 5(4) with dense output; [`ImexEngine`],
 //!   the additive Runge-Kutta pair with the bristle states solved exactly at
-//!   each stage; [`RosenbrockEngine`], linearly implicit with the model's exact Jacobian,
+//!   each stage; [`Dop853Engine`], the explicit eighth-order pair, opt-in for
+//!   tight tolerances on smooth models (on the shipped stages the bristle and
+//!   bushing stiffness hold it near its stability limit, where it does not
+//!   pay); [`RosenbrockEngine`], linearly implicit with the model's exact Jacobian,
 //!   for very stiff isolators; [`RapierEngine`], rapier3d-f64 under the
 //!   model's own force elements, for end stops and loose payloads. The
 //!   adaptive engines and the co-simulation [`Stepper`] share one driver:
@@ -41,6 +44,7 @@
 
 pub mod controller;
 pub mod cosim;
+pub mod dop853;
 pub mod dopri;
 mod driver;
 pub mod engine;
@@ -62,13 +66,14 @@ pub mod trajectory;
 pub use cosim::{HeldInputs, Stepper, StepperTolerances};
 pub use dopri::{Checkpoint, StepCounts};
 pub use engine::{
-    AutoEngine, Engine, ImexEngine, NativeEngine, Progress, RosenbrockEngine, no_progress,
+    AutoEngine, Dop853Engine, Engine, ImexEngine, NativeEngine, Progress, RosenbrockEngine,
+    no_progress,
 };
 pub use excitation::{Excitation, ScenarioExcitation};
 pub use metrics::{SignalSummary, WindowStats, summarize, window_stats};
 pub use rapier_engine::RapierEngine;
 pub use run::{RunError, RunOutput, initial_state, initial_state_with, run_scenario, validate};
-pub use select::{engine_by_name, engine_for, engine_of_kind};
+pub use select::{engine_by_name, engine_for, engine_in, engine_of_kind};
 pub use settings::{SimError, SimSettings, sample_times};
 pub use tracking::{TrackingMetrics, tracking_metrics};
 pub use trajectory::{ExtraSignal, SignalTable, SolverStats, Trajectory};

@@ -3,7 +3,7 @@
 
 use fistage_model::{EngineKind, Scenario};
 
-use crate::engine::{AutoEngine, Engine, ImexEngine, NativeEngine, RosenbrockEngine};
+use crate::engine::{AutoEngine, Dop853Engine, Engine, ImexEngine, NativeEngine, RosenbrockEngine};
 use crate::rapier_engine::RapierEngine;
 
 /// The engine of a kind with default settings (the rapier engine without colliders).
@@ -13,19 +13,28 @@ pub fn engine_of_kind(kind: EngineKind) -> Box<dyn Engine> {
         EngineKind::Native => Box::new(NativeEngine),
         EngineKind::Rosenbrock => Box::new(RosenbrockEngine),
         EngineKind::Imex => Box::new(ImexEngine),
+        EngineKind::Dop853 => Box::new(Dop853Engine),
         EngineKind::Rapier => Box::new(RapierEngine::default()),
     }
 }
 
 /// An engine by name or alias (`auto`, `native`, `dopri5`, `imex`, `ark548`,
-/// `rosenbrock`, `implicit`, `rapier`).
+/// `dop853`, `rosenbrock`, `implicit`, `rapier`) with default settings; for a
+/// scenario's run, [`engine_in`].
 pub fn engine_by_name(name: &str) -> Option<Box<dyn Engine>> {
     name.parse().ok().map(engine_of_kind)
 }
 
 /// The engine a scenario names (`solver.engine` or `engine`), with its settings.
 pub fn engine_for(scenario: &Scenario) -> Box<dyn Engine> {
-    match scenario.solver.engine {
+    engine_in(scenario, scenario.solver.engine)
+}
+
+/// The engine of `kind` with a scenario's settings: the rapier engine with
+/// its `[rapier]` table, the default engine reading its choice at the
+/// scenario's slipping velocity (without it there is no slip to read).
+pub fn engine_in(scenario: &Scenario, kind: EngineKind) -> Box<dyn Engine> {
+    match kind {
         EngineKind::Rapier => Box::new(RapierEngine {
             settings: scenario.rapier.clone(),
         }),
