@@ -2,14 +2,15 @@
 //! point, a tolerance analysis's sample): the scenario with the point's
 //! parameter values, assembled from the robot file as written, then the
 //! linear verdict (eigenvalues at the slipping equilibrium), the simulated
-//! verdict (persistent oscillation of the tracking error from rest), the
+//! verdict (persistent oscillation of the tracking error from rest, on the
+//! scenario's engine: by default the method `auto` takes for the point), the
 //! oscillation amplitude and bistability (a stable equilibrium beside a limit
 //! cycle).
 
-use fistage_model::{EquilibriumKind, LoadError, Loaded, Parameter, RobotSpec, Scenario, assemble};
-use fistage_sim::{
-    Engine, Excitation, NativeEngine, ScenarioExcitation, SimSettings, initial_state,
+use fistage_model::{
+    EngineKind, EquilibriumKind, LoadError, Loaded, Parameter, RobotSpec, Scenario, assemble,
 };
+use fistage_sim::{AutoEngine, Engine, Excitation, ScenarioExcitation, SimSettings, initial_state};
 use rayon::prelude::*;
 use serde::Deserialize;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -216,6 +217,20 @@ pub fn linear_verdict(loaded: &Loaded) -> Option<(Option<bool>, f64)> {
     Some((stable, analysis.max_real_part))
 }
 
+/// The engine of a point's simulated verdict: the scenario's adaptive
+/// engine, where it is the default (`auto`, or the fixed-step rapier engine)
+/// the method `auto` takes for the point's own model, chosen once for the
+/// point's runs.
+fn verdict_engine(loaded: &Loaded, x0: &[f64]) -> Box<dyn Engine> {
+    let scenario = &loaded.scenario;
+    match scenario.solver.engine {
+        kind if kind.is_adaptive() && kind != EngineKind::Auto => {
+            fistage_sim::engine_in(scenario, kind)
+        }
+        _ => AutoEngine::for_scenario(scenario).resolved(&loaded.model, x0),
+    }
+}
+
 /// Steady peak-to-peaks of a run from rest.
 struct Steady {
     /// Tracking error (sensor minus reference) over the last quarter, m.
@@ -227,9 +242,10 @@ struct Steady {
     yaw: Option<f64>,
 }
 
-/// The tracking error's peak-to-peak over the last quarter of a run and the
-/// quarter before it, and the yaw's over the last quarter.
-fn steady_peak_to_peak(loaded: &Loaded, duration: f64) -> Option<Steady> {
+/// The tracking error's peak-to-peak over the last quarter of a run from
+/// rest on `engine` and the quarter before it, and the yaw's over the last
+/// quarter.
+fn steady_peak_to_peak(loaded: &Loaded, engine: &dyn Engine, duration: f64) -> Option<Steady> {
     let scenario = &loaded.scenario;
     let model = &loaded.model;
     let sensor = model.controller().map_or(0, |c| c.sensor);
@@ -246,7 +262,7 @@ fn steady_peak_to_peak(loaded: &Loaded, duration: f64) -> Option<Steady> {
         ..SimSettings::from_scenario(scenario)
     };
     let x0 = initial_state(model, scenario).ok()?;
-    let trajectory = NativeEngine
+    let trajectory = engine
         .simulate(
             model,
             &x0,
@@ -295,8 +311,10 @@ fn steady_peak_to_peak(loaded: &Loaded, duration: f64) -> Option<Steady> {
 /// long, at most twice.
 fn simulated_verdict(loaded: &Loaded, assessment: &Assessment) -> Option<(bool, f64, Option<f64>)> {
     let mut duration = assessment.duration.unwrap_or(loaded.scenario.duration);
+    let x0 = initial_state(&loaded.model, &loaded.scenario).ok()?;
+    let engine = verdict_engine(loaded, &x0);
     for extension in 0..3 {
-        let steady = steady_peak_to_peak(loaded, duration)?;
+        let steady = steady_peak_to_peak(loaded, engine.as_ref(), duration)?;
         if steady.last <= assessment.oscillation_threshold {
             return Some((true, steady.last, steady.yaw));
         }

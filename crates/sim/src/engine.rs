@@ -160,6 +160,15 @@ impl AutoEngine {
     pub fn choice(&self, model: &Model, x0: &[f64]) -> MethodChoice {
         choose_method(model, &self.slipping, x0)
     }
+
+    /// The engine of the method it takes for `model` started at `x0`: for
+    /// many runs of one model, the choice made once.
+    pub fn resolved(&self, model: &Model, x0: &[f64]) -> Box<dyn Engine> {
+        match self.choice(model, x0).method {
+            Method::DormandPrince => Box::new(NativeEngine),
+            Method::ImexBristles => Box::new(ImexEngine),
+        }
+    }
 }
 
 impl Engine for AutoEngine {
@@ -175,12 +184,8 @@ impl Engine for AutoEngine {
         settings: &SimSettings,
         progress: &mut Progress<'_>,
     ) -> Result<Trajectory, SimError> {
-        match self.choice(model, x0).method {
-            Method::DormandPrince => {
-                NativeEngine.simulate(model, x0, excitation, settings, progress)
-            }
-            Method::ImexBristles => ImexEngine.simulate(model, x0, excitation, settings, progress),
-        }
+        self.resolved(model, x0)
+            .simulate(model, x0, excitation, settings, progress)
     }
 }
 
