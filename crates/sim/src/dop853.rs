@@ -13,6 +13,7 @@ mod tableau;
 
 use crate::controller::{Gains, Judgement, PiController};
 use crate::dopri::{OdeSystem, StepCounts, StepFailure, Tolerances, starting_step};
+use crate::sized::{state_count, with_state_count};
 use tableau::{ALL, COUPLING, DENSE, ERROR_FIFTH, ERROR_THIRD, NODES, STEPPING, WEIGHTS};
 
 /// Where stage `j` of the last accepted step is kept between steps: the
@@ -44,6 +45,9 @@ pub struct Dop853 {
     stage: Vec<f64>,
     /// The trial point; after an accepted step, the step's start.
     x_new: Vec<f64>,
+    /// The fifth- and third-order error estimates of the trial step.
+    error_fifth: Vec<f64>,
+    error_third: Vec<f64>,
     /// Coefficients of the continuous extension of the last accepted step.
     dense: [Vec<f64>; DENSE_TERMS],
     dense_formed: bool,
@@ -93,6 +97,8 @@ impl Dop853 {
             k: std::array::from_fn(|_| zeros()),
             stage: zeros(),
             x_new: zeros(),
+            error_fifth: zeros(),
+            error_third: zeros(),
             dense: std::array::from_fn(|_| zeros()),
             dense_formed: true,
             t_previous: t0,
@@ -146,9 +152,21 @@ impl Dop853 {
     }
 
     /// One trial step of size h into `x_new`; the square of Hairer's blended
-    /// error norm, `h |e5|^2 / sqrt(n (|e5|^2 + 0.01 |e3|^2))`.
+    /// error norm, `h |e5|^2 / sqrt(n (|e5|^2 + 0.01 |e3|^2))`. Small systems
+    /// take a copy of the arithmetic whose length is a compile-time
+    /// constant, as in [`crate::dopri`].
     fn attempt<S: OdeSystem + ?Sized>(&mut self, system: &mut S, h: f64) -> f64 {
-        let (n, t) = (self.n, self.t);
+        with_state_count!(self.n, self.attempt_sized(system, h))
+    }
+
+    /// [`Self::attempt`] over `N` states (`N` = 0, `DYNAMIC`: `self.n`).
+    #[inline(always)]
+    fn attempt_sized<const N: usize, S: OdeSystem + ?Sized>(
+        &mut self,
+        system: &mut S,
+        h: f64,
+    ) -> f64 {
+        let (n, t) = (state_count::<N>(self.n), self.t);
         let x = &self.x[..n];
         let stage = &mut self.stage[..n];
         for i in 1..STEPPING {
@@ -160,15 +178,20 @@ impl Dop853 {
         combine(x_new, x, h, &WEIGHTS, &self.k[..STEPPING]);
         let atol = &self.tol.atol[..n];
         let (mut fifth, mut third) = (-0.0, -0.0);
-        for m in 0..n {
-            let (mut e5, mut e3) = (0.0, 0.0);
-            for (j, k) in self.k[..STEPPING].iter().enumerate() {
-                e5 += ERROR_FIFTH[j] * k[m];
-                e3 += ERROR_THIRD[j] * k[m];
+        let (e5, e3) = (&mut self.error_fifth[..n], &mut self.error_third[..n]);
+        e5.fill(0.0);
+        e3.fill(0.0);
+        for (j, k) in self.k[..STEPPING].iter().enumerate() {
+            let (w5, w3) = (ERROR_FIFTH[j], ERROR_THIRD[j]);
+            for ((e5, e3), k) in e5.iter_mut().zip(e3.iter_mut()).zip(&k[..n]) {
+                *e5 += w5 * k;
+                *e3 += w3 * k;
             }
+        }
+        for m in 0..n {
             let scale = atol[m] + self.tol.rtol * x[m].abs().max(x_new[m].abs());
-            fifth += (e5 / scale) * (e5 / scale);
-            third += (e3 / scale) * (e3 / scale);
+            fifth += (e5[m] / scale) * (e5[m] / scale);
+            third += (e3[m] / scale) * (e3[m] / scale);
         }
         let blended = fifth + 0.01 * third;
         let mean_square = if blended > 0.0 {
@@ -267,6 +290,7 @@ impl Dop853 {
 }
 
 /// `out = x + h sum_j a_j k_j` over the non-zero `a_j`.
+#[inline(always)]
 fn combine(out: &mut [f64], x: &[f64], h: f64, a: &[f64], k: &[Vec<f64>]) {
     let n = out.len();
     out.fill(0.0);

@@ -4,6 +4,7 @@
 //! [`OdeSystem`].
 
 use crate::controller::{Judgement, PiController};
+use crate::sized::{state_count, with_state_count};
 
 /// A system `x' = f(t, x)`.
 pub trait OdeSystem {
@@ -175,16 +176,6 @@ pub struct Checkpoint {
     pub counts: StepCounts,
 }
 
-/// State-count marker for "known only at run time".
-const DYNAMIC: usize = 0;
-
-/// The number of states: `N`, or `n` when `N` is [`DYNAMIC`]. With a
-/// constant `N` every slice has a length the compiler knows.
-#[inline(always)]
-fn state_count<const N: usize>(n: usize) -> usize {
-    if N == DYNAMIC { n } else { N }
-}
-
 /// The integrator's state between steps, including the stages of the last
 /// accepted step (its dense output).
 pub struct DormandPrince {
@@ -341,20 +332,10 @@ impl DormandPrince {
     /// take a copy of the arithmetic whose length is a compile-time constant
     /// (fully unrolled, no loop overhead); the operations are the same.
     fn attempt<S: OdeSystem + ?Sized>(&mut self, system: &mut S, h: f64) -> f64 {
-        match self.n {
-            1 => self.attempt_sized::<1, S>(system, h),
-            2 => self.attempt_sized::<2, S>(system, h),
-            3 => self.attempt_sized::<3, S>(system, h),
-            4 => self.attempt_sized::<4, S>(system, h),
-            5 => self.attempt_sized::<5, S>(system, h),
-            6 => self.attempt_sized::<6, S>(system, h),
-            7 => self.attempt_sized::<7, S>(system, h),
-            8 => self.attempt_sized::<8, S>(system, h),
-            _ => self.attempt_sized::<DYNAMIC, S>(system, h),
-        }
+        with_state_count!(self.n, self.attempt_sized(system, h))
     }
 
-    /// [`Self::attempt`] over `N` states (`N` = [`DYNAMIC`]: `self.n`).
+    /// [`Self::attempt`] over `N` states (`N` = 0, `DYNAMIC`: `self.n`).
     #[inline(always)]
     fn attempt_sized<const N: usize, S: OdeSystem + ?Sized>(
         &mut self,

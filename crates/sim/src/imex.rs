@@ -16,6 +16,7 @@
 
 use crate::controller::{Judgement, PiController};
 use crate::dopri::{Checkpoint, OdeSystem, StepCounts, StepFailure, Tolerances, starting_step};
+use crate::sized::{state_count, with_state_count};
 
 /// A system with some states treated implicitly.
 pub trait SplitSystem: OdeSystem {
@@ -192,9 +193,6 @@ const GAMMA: f64 = IMPLICIT[1][1];
 /// Stages.
 const STAGES: usize = 8;
 
-/// State-count marker for "known only at run time".
-const DYNAMIC: usize = 0;
-
 /// The integrator between steps.
 pub struct ImexRungeKutta {
     tol: Tolerances,
@@ -354,27 +352,17 @@ impl ImexRungeKutta {
     /// error estimate. Small systems take a copy of the arithmetic whose
     /// length is a compile-time constant, as in [`crate::dopri`].
     fn attempt<S: SplitSystem + ?Sized>(&mut self, system: &mut S, h: f64) -> f64 {
-        match self.n {
-            1 => self.attempt_sized::<1, S>(system, h),
-            2 => self.attempt_sized::<2, S>(system, h),
-            3 => self.attempt_sized::<3, S>(system, h),
-            4 => self.attempt_sized::<4, S>(system, h),
-            5 => self.attempt_sized::<5, S>(system, h),
-            6 => self.attempt_sized::<6, S>(system, h),
-            7 => self.attempt_sized::<7, S>(system, h),
-            8 => self.attempt_sized::<8, S>(system, h),
-            _ => self.attempt_sized::<DYNAMIC, S>(system, h),
-        }
+        with_state_count!(self.n, self.attempt_sized(system, h))
     }
 
-    /// [`Self::attempt`] over `N` states (`N` = [`DYNAMIC`]: `self.n`).
+    /// [`Self::attempt`] over `N` states (`N` = 0, `DYNAMIC`: `self.n`).
     #[inline(always)]
     fn attempt_sized<const N: usize, S: SplitSystem + ?Sized>(
         &mut self,
         system: &mut S,
         h: f64,
     ) -> f64 {
-        let (n, t) = (if N == DYNAMIC { self.n } else { N }, self.t);
+        let (n, t) = (state_count::<N>(self.n), self.t);
         let x = &self.x[..n];
         let stage = &mut self.stage[..n];
         for i in 1..STAGES {

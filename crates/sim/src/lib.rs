@@ -11,9 +11,9 @@
 //!   error-controlled Dormand-Prince 5(4) with dense output; [`ImexEngine`],
 //!   the additive Runge-Kutta pair with the bristle states solved exactly at
 //!   each stage; [`Dop853Engine`], the explicit eighth-order pair, opt-in for
-//!   tight tolerances on smooth models (on the shipped stages the bristle and
-//!   bushing stiffness hold it near its stability limit, where it does not
-//!   pay); [`RosenbrockEngine`], linearly implicit with the model's exact Jacobian,
+//!   tight tolerances (on the shipped stages the bristle and bushing
+//!   stiffness hold it near its stability limit; it pays only at rtol 1e-10
+//!   on the small ones); [`RosenbrockEngine`], linearly implicit with the model's exact Jacobian,
 //!   for very stiff isolators; [`RapierEngine`], rapier3d-f64 under the
 //!   model's own force elements, for end stops and loose payloads. The
 //!   adaptive engines and the co-simulation [`Stepper`] share one driver:
@@ -59,6 +59,7 @@ pub mod rosenbrock;
 pub mod run;
 pub mod select;
 pub mod settings;
+mod sized;
 pub mod summary;
 pub mod tracking;
 pub mod trajectory;
