@@ -44,20 +44,32 @@ pub fn robust_table(scenario: &Path) -> anyhow::Result<()> {
         spec.assessment.analysis = analysis;
         spec.assessment.duration = duration;
         let indices: Vec<usize> = (0..samples).collect();
-        let time = |threads: usize| {
-            let start = Instant::now();
-            let results = spec.run(&loaded, &robot_file, &indices, threads, &|_, _| {});
-            (start.elapsed().as_secs_f64(), results)
-        };
-        let (one, first) = time(1);
-        let (two, second) = time(2);
-        anyhow::ensure!(
-            first == second,
-            "one and two threads gave different samples"
-        );
+        let (one, two) = one_and_two_threads("samples", |threads| {
+            spec.run(&loaded, &robot_file, &indices, threads, &|_, _| {})
+        })?;
         print_row(samples, label, one, two);
     }
     sweep_row(Path::new(SWEEP))
+}
+
+/// Wall seconds of `compute` on one and on two threads, which must give
+/// the same `items`.
+fn one_and_two_threads<T: PartialEq>(
+    items: &str,
+    compute: impl Fn(usize) -> T,
+) -> anyhow::Result<(f64, f64)> {
+    let time = |threads: usize| {
+        let start = Instant::now();
+        let results = compute(threads);
+        (start.elapsed().as_secs_f64(), results)
+    };
+    let (one, first) = time(1);
+    let (two, second) = time(2);
+    anyhow::ensure!(
+        first == second,
+        "one and two threads gave different {items}"
+    );
+    Ok((one, two))
 }
 
 fn print_row(items: usize, label: &str, one: f64, two: f64) {
@@ -74,17 +86,9 @@ fn sweep_row(scenario: &Path) -> anyhow::Result<()> {
     let robot_file = RobotSpec::from_file(&loaded.scenario.robot)?;
     let spec = SweepSpec::from_scenario(&loaded.scenario)?;
     let indices: Vec<usize> = (0..spec.len()).collect();
-    let time = |threads: usize| {
-        let start = Instant::now();
-        let results = run_points(&loaded, &robot_file, &spec, &indices, threads, &|_, _| {});
-        (start.elapsed().as_secs_f64(), results)
-    };
-    let (one, first) = time(1);
-    let (two, second) = time(2);
-    anyhow::ensure!(
-        first == second,
-        "one and two threads gave different sweep points"
-    );
+    let (one, two) = one_and_two_threads("sweep points", |threads| {
+        run_points(&loaded, &robot_file, &spec, &indices, threads, &|_, _| {})
+    })?;
     let label = format!("sweep `{}`", scenario.display());
     print_row(spec.len(), &label, one, two);
     Ok(())

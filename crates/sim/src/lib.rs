@@ -74,7 +74,7 @@ pub use excitation::{Excitation, ScenarioExcitation};
 pub use metrics::{SignalSummary, WindowStats, summarize, window_stats};
 pub use rapier_engine::RapierEngine;
 pub use run::{RunError, RunOutput, initial_state, initial_state_with, run_scenario, validate};
-pub use select::{engine_by_name, engine_for, engine_in, engine_of_kind};
+pub use select::{engine_for, engine_in, engine_of_kind};
 pub use settings::{SimError, SimSettings, sample_times};
 pub use tracking::{TrackingMetrics, tracking_metrics};
 pub use trajectory::{ExtraSignal, SignalTable, SolverStats, Trajectory};

@@ -1,5 +1,5 @@
-//! Which engine runs: the engine of an [`EngineKind`], by name, or the one a
-//! scenario names, with its settings.
+//! Which engine runs: the engine of an [`EngineKind`] with default settings,
+//! with a scenario's settings, or the one a scenario names.
 
 use fistage_model::{EngineKind, Scenario};
 
@@ -16,13 +16,6 @@ pub fn engine_of_kind(kind: EngineKind) -> Box<dyn Engine> {
         EngineKind::Dop853 => Box::new(Dop853Engine),
         EngineKind::Rapier => Box::new(RapierEngine::default()),
     }
-}
-
-/// An engine by name or alias (`auto`, `native`, `dopri5`, `imex`, `ark548`,
-/// `dop853`, `rosenbrock`, `implicit`, `rapier`) with default settings; for a
-/// scenario's run, [`engine_in`].
-pub fn engine_by_name(name: &str) -> Option<Box<dyn Engine>> {
-    name.parse().ok().map(engine_of_kind)
 }
 
 /// The engine a scenario names (`solver.engine` or `engine`), with its settings.
