@@ -9,6 +9,8 @@ use std::time::Instant;
 
 use anyhow::Context;
 use fistage_model::Loaded;
+
+use crate::bench_matched::{AccuracyRow, print_matched};
 use fistage_sim::{
     Engine, Excitation, ScenarioExcitation, SimSettings, Trajectory, engine_for, initial_state,
 };
@@ -70,7 +72,9 @@ pub struct BenchArgs {
     /// BDF (exact Jacobian) and Adams (SUNDIALS 6 from Debian's
     /// libsundials-dev, opened at run time) and SciPy's solve_ivp (RK45,
     /// DOP853, BDF; through the Python package, with `--python` or
-    /// target/py-venv/bin/python), with a table of CPU-time ratios.
+    /// target/py-venv/bin/python), with a table of CPU-time ratios at the
+    /// same rtol and one at matched accuracy (each peer's cost of each
+    /// fistage row's relative error, read from the peer's rows).
     #[arg(long)]
     pub peers: bool,
     /// Time one right-hand side of the assembled model against a
@@ -371,6 +375,8 @@ fn engine_table(args: &BenchArgs, scenario: &Path, rtols: &[f64]) -> anyhow::Res
     println!("|---|---|---|---|---|---|---|---|---|---|");
     let cvode = args.peers.then(crate::peers::cvode::Cvode::open);
     let mut ratios = Vec::new();
+    let mut fistage_rows = Vec::new();
+    let mut peer_rows: Vec<(String, Vec<AccuracyRow>)> = Vec::new();
     for &rtol in rtols {
         let mut first = None;
         for engine in &timed {
@@ -392,7 +398,14 @@ fn engine_table(args: &BenchArgs, scenario: &Path, rtols: &[f64]) -> anyhow::Res
                 counts.rhs_evaluations,
                 timing.trajectory.stats.engine,
             );
-            first.get_or_insert(timing);
+            if first.is_none() {
+                fistage_rows.push(AccuracyRow {
+                    rtol,
+                    cpu_s: timing.cpu_s,
+                    relative,
+                });
+                first = Some(timing);
+            }
         }
         let timing = first.context("no engine timed")?;
         let Some(cvode) = &cvode else { continue };
@@ -436,6 +449,18 @@ fn engine_table(args: &BenchArgs, scenario: &Path, rtols: &[f64]) -> anyhow::Res
                         run.counts.rhs_evaluations,
                         run.method,
                     );
+                    let row = AccuracyRow {
+                        rtol,
+                        cpu_s: run.cpu_s,
+                        relative,
+                    };
+                    match peer_rows
+                        .iter_mut()
+                        .find(|(family, _)| *family == run.family)
+                    {
+                        Some((_, rows)) => rows.push(row),
+                        None => peer_rows.push((run.family.clone(), vec![row])),
+                    }
                     ratios.push((rtol, run.method, run.cpu_s / timing.cpu_s, relative));
                 }
                 Err(skipped) => println!(
@@ -455,6 +480,7 @@ fn engine_table(args: &BenchArgs, scenario: &Path, rtols: &[f64]) -> anyhow::Res
             println!("| {rtol:.0e} | {method} | {ratio:.1} | {relative:.2e} |");
         }
     }
+    print_matched(&fistage_rows, &peer_rows);
     Ok(())
 }
 

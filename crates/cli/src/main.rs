@@ -6,6 +6,7 @@
 
 mod bench;
 mod bench_fmu;
+mod bench_matched;
 mod bench_python;
 mod bench_record;
 mod bench_rhs;

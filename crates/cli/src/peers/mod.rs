@@ -17,6 +17,9 @@ use crate::bench::{median, thread_cpu_time};
 pub struct PeerRun {
     /// What ran, as the table shows it.
     pub method: String,
+    /// The method without this run's counts: rows of one family are one
+    /// peer at several tolerances.
+    pub family: String,
     /// Median wall time, s.
     pub wall_s: f64,
     /// Median CPU time of the integration, s.
@@ -73,6 +76,7 @@ pub fn cvode_runs(
         }
         rows.push(match (last, failure) {
             (Some(run), None) => Ok(PeerRun {
+                family: method.label().to_string(),
                 method: format!("{} ({} Jacobians)", method.label(), run.jacobians)
                     .replace(" (0 Jacobians)", ""),
                 wall_s: median(&mut walls),

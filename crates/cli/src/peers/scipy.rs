@@ -143,6 +143,7 @@ fn row(value: &serde_json::Value, n_states: usize, times: &[f64]) -> Result<Peer
     let nfev = value["nfev"].as_u64().unwrap_or(0);
     let njev = value["njev"].as_u64().unwrap_or(0);
     Ok(PeerRun {
+        family: method.clone(),
         method: if njev > 0 {
             format!("{method} ({njev} Jacobians)")
         } else {
