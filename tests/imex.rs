@@ -67,3 +67,43 @@ fn bristle_bound_stages_take_imex_and_bushing_bound_ones_do_not() {
     println!("friction20_traverse: {}", picked.reason);
     assert_eq!(picked.method, Method::DormandPrince);
 }
+
+/// The four-bearing stage under the Fig. 5b conditions: the full-state
+/// Jacobian at its slipping equilibrium (quaternion rows and all) once sent
+/// the unbalanced Schur iteration into an endless loop, so the default engine
+/// never started. Its spectral radius must now come out, and agree with that
+/// of the Jacobian in tangent coordinates (rotation vectors instead of the
+/// quaternion: a different matrix with the same modes but the quaternion's
+/// norm direction, which is neutral).
+#[test]
+fn the_choice_reads_the_four_bearing_stage_spectrum() {
+    use fistage_model::EquilibriumKind;
+    use fistage_model::eigen::spectral_radius;
+    for path in [
+        "scenarios/coupling/symmetric_fig05b.toml",
+        "scenarios/coupling/symmetric_real_height_fig05b.toml",
+    ] {
+        let loaded = load(path);
+        let x0 = initial_state(&loaded.model, &loaded.scenario).expect("start");
+        let picked = AutoEngine::for_scenario(&loaded.scenario).choice(&loaded.model, &x0);
+        println!("{path}: {}", picked.reason);
+        let full = picked.full_radius.expect("the full spectrum");
+        let slipping = loaded.scenario.slipping_inputs();
+        let equilibrium = loaded
+            .model
+            .equilibrium(EquilibriumKind::Slipping, &slipping, &x0)
+            .expect("slipping equilibrium");
+        let (tangent, _) = loaded.model.tangent_jacobian(&equilibrium, &slipping);
+        let reduced = spectral_radius(&tangent).expect("the tangent spectrum");
+        assert!(
+            (full - reduced).abs() < 1e-8 * reduced,
+            "{path}: {full:e} against {reduced:e} in tangent coordinates"
+        );
+        // The bushings (kHz), not the bristles, bound the explicit step here.
+        assert_eq!(picked.method, Method::DormandPrince, "{path}");
+        assert!(
+            full > 2.0 * std::f64::consts::PI * 1.4e3,
+            "{path}: {full:e}"
+        );
+    }
+}

@@ -33,7 +33,6 @@
 
 pub mod assess;
 pub mod compare;
-pub mod eigen;
 pub mod lab;
 pub mod lyapunov;
 pub mod modes;
@@ -43,4 +42,5 @@ pub mod routh;
 pub mod sweep;
 
 pub use eigen::{EigenPair, eigen_decomposition};
+pub use fistage_model::eigen;
 pub use modes::{AnalysisError, ModalAnalysis, Mode, Participation, Verdict, modal_analysis};

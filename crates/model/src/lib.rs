@@ -65,6 +65,7 @@ mod bristle;
 pub mod compensation;
 pub mod dahl;
 pub mod dynamics;
+pub mod eigen;
 pub mod elements;
 pub mod equilibrium;
 pub mod error;

@@ -13,8 +13,8 @@
 //! at least [`REQUIRED_GAIN`]; a model without LuGre contacts, or with no
 //! slipping equilibrium to read, stays explicit.
 
+use fistage_model::eigen::spectral_radius;
 use fistage_model::{EquilibriumKind, Inputs, Model};
-use nalgebra::DMatrix;
 
 /// How much the implicit treatment of the bristles must raise the bound on
 /// the explicit step before it pays (measured on the paper's Fig. 5b stage
@@ -74,11 +74,20 @@ pub fn choose_method(model: &Model, slipping: &Inputs, start: &[f64]) -> MethodC
         Err(e) => return explicit(format!("{e}; explicit by default")),
     };
     let mut jacobian = model.jacobian(&equilibrium, slipping);
-    let full = spectral_radius(&jacobian);
+    let Some(full) = spectral_radius(&jacobian) else {
+        return explicit(
+            "the Jacobian's eigenvalues at the slipping equilibrium did not converge; explicit by default"
+                .into(),
+        );
+    };
     for &row in &bristles {
         jacobian.row_mut(row).fill(0.0);
     }
-    let explicit_part = spectral_radius(&jacobian);
+    let Some(explicit_part) = spectral_radius(&jacobian) else {
+        return explicit(
+            "the eigenvalues without the bristle rows did not converge; explicit by default".into(),
+        );
+    };
     let gain = full / explicit_part.max(f64::MIN_POSITIVE);
     let (method, verdict) = if gain >= REQUIRED_GAIN {
         (
@@ -99,14 +108,4 @@ pub fn choose_method(model: &Model, slipping: &Inputs, start: &[f64]) -> MethodC
             "{verdict}: spectral radius {full:.3e} 1/s, {explicit_part:.3e} 1/s without the bristle rows ({gain:.1}x; implicit bristles pay from {REQUIRED_GAIN}x)"
         ),
     }
-}
-
-/// Largest eigenvalue modulus.
-fn spectral_radius(matrix: &DMatrix<f64>) -> f64 {
-    matrix
-        .clone()
-        .complex_eigenvalues()
-        .iter()
-        .map(|l| l.norm())
-        .fold(0.0, f64::max)
 }

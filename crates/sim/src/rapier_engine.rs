@@ -28,6 +28,7 @@ use crate::engine::Engine;
 use crate::excitation::Excitation;
 use crate::settings::{SimError, SimSettings, sample_times};
 use crate::trajectory::{ExtraSignal, SolverStats, Trajectory};
+use fistage_model::eigen::spectral_radius;
 
 /// Default step as a fraction of the explicit stability limit 2 / |lambda|max.
 pub const DEFAULT_STEP_FRACTION: f64 = 0.05;
@@ -472,15 +473,18 @@ fn set_joint_coordinates(model: &Model, x0: &[f64], world: &mut World) {
     }
 }
 
-/// Largest |eigenvalue| of the linearised model at (x, u).
+/// Largest |eigenvalue| of the linearised model at (x, u); where the
+/// eigenvalues cannot be computed, the largest absolute row sum, which bounds
+/// it from above (a smaller step, never a larger one).
 pub fn fastest_rate(model: &Model, x: &[f64], inputs: &Inputs) -> f64 {
     let (reduced, _) = model.tangent_jacobian(x, inputs);
-    reduced
-        .complex_eigenvalues()
-        .iter()
-        .map(|l| l.norm())
-        .filter(|v| v.is_finite())
-        .fold(0.0, f64::max)
+    spectral_radius(&reduced).unwrap_or_else(|| {
+        reduced
+            .row_iter()
+            .map(|row| row.iter().map(|v| v.abs()).sum::<f64>())
+            .filter(|v| v.is_finite())
+            .fold(0.0, f64::max)
+    })
 }
 
 /// Slip speed assumed for the bristle stiffness bound when the inputs at the

@@ -1,12 +1,16 @@
-//! Eigenvalues and eigenvectors of a real non-symmetric matrix. The matrix is
-//! first balanced (a diagonal similarity D^-1 A D with powers of two that evens
-//! out row and column norms, as LAPACK's gebal does: the Jacobians here mix
-//! bristle deflections of micrometres with accelerations of thousands of m/s^2);
-//! eigenvalues come from nalgebra's Schur decomposition with an iteration cap
-//! (never an endless loop), eigenvectors from complex inverse iteration
-//! (shifted slightly off each eigenvalue, deflating against vectors already
-//! found for the same eigenvalue so that repeated eigenvalues get independent
-//! vectors), mapped back through D.
+//! Eigenvalues and eigenvectors of a real non-symmetric matrix, for every
+//! part of the toolkit that reads a Jacobian's spectrum (the default engine's
+//! choice of method, the rapier engine's step, modal and stability analysis).
+//! The matrix is first balanced (a diagonal similarity D^-1 A D with powers of
+//! two that evens out row and column norms, as LAPACK's gebal does: the
+//! Jacobians here mix bristle deflections of micrometres with accelerations of
+//! thousands of m/s^2); eigenvalues come from nalgebra's Schur decomposition
+//! with an iteration cap (never an endless loop: unbalanced and uncapped, the
+//! Schur iteration does not finish on the full-state Jacobian of the
+//! four-bearing stage under the Fig. 5b conditions), eigenvectors from complex
+//! inverse iteration (shifted slightly off each eigenvalue, deflating against
+//! vectors already found for the same eigenvalue so that repeated eigenvalues
+//! get independent vectors), mapped back through D.
 
 use nalgebra::{Complex, DMatrix, DVector};
 
@@ -63,15 +67,37 @@ fn balance(matrix: &DMatrix<f64>) -> Vec<f64> {
     scale
 }
 
+/// The eigenvalues of a square matrix, balanced first; `None` when the Schur
+/// iteration does not converge even at a loose tolerance.
+pub fn eigenvalues(matrix: &DMatrix<f64>) -> Option<Vec<Complex<f64>>> {
+    let scale = balance(matrix);
+    schur_eigenvalues(&balanced(matrix, &scale))
+}
+
+/// The largest eigenvalue modulus of a square matrix; `None` when the
+/// eigenvalues cannot be computed (see [`eigenvalues`]).
+pub fn spectral_radius(matrix: &DMatrix<f64>) -> Option<f64> {
+    let values = eigenvalues(matrix)?;
+    let radius = values.iter().map(|l| l.norm()).fold(0.0, f64::max);
+    radius.is_finite().then_some(radius)
+}
+
+/// D^-1 A D for the balancing scale D.
+fn balanced(matrix: &DMatrix<f64>, scale: &[f64]) -> DMatrix<f64> {
+    let n = matrix.nrows();
+    DMatrix::from_fn(n, n, |r, c| matrix[(r, c)] * scale[c] / scale[r])
+}
+
 /// Eigenvalues by the Schur form, with an iteration cap and a graded
 /// convergence tolerance if the tightest one is not reached.
-fn eigenvalues(matrix: &DMatrix<f64>) -> Vec<Complex<f64>> {
-    for epsilon in [f64::EPSILON, 1e-14, 1e-13, 1e-12, 1e-10] {
-        if let Some(schur) = nalgebra::linalg::Schur::try_new(matrix.clone(), epsilon, 20_000) {
-            return schur.complex_eigenvalues().iter().copied().collect();
-        }
+fn schur_eigenvalues(matrix: &DMatrix<f64>) -> Option<Vec<Complex<f64>>> {
+    if matrix.iter().any(|v| !v.is_finite()) {
+        return None;
     }
-    vec![Complex::new(f64::NAN, f64::NAN); matrix.nrows()]
+    [f64::EPSILON, 1e-14, 1e-13, 1e-12, 1e-10]
+        .into_iter()
+        .find_map(|epsilon| nalgebra::linalg::Schur::try_new(matrix.clone(), epsilon, 20_000))
+        .map(|schur| schur.complex_eigenvalues().iter().copied().collect())
 }
 
 /// All eigenpairs of a square real matrix, sorted by |lambda|, then by imaginary
@@ -79,8 +105,9 @@ fn eigenvalues(matrix: &DMatrix<f64>) -> Vec<Complex<f64>> {
 pub fn eigen_decomposition(original: &DMatrix<f64>) -> Vec<EigenPair> {
     let n = original.nrows();
     let scale = balance(original);
-    let matrix = DMatrix::from_fn(n, n, |r, c| original[(r, c)] * scale[c] / scale[r]);
-    let mut values = eigenvalues(&matrix);
+    let matrix = balanced(original, &scale);
+    let mut values =
+        schur_eigenvalues(&matrix).unwrap_or_else(|| vec![Complex::new(f64::NAN, f64::NAN); n]);
     values.sort_by(|a, b| a.norm().total_cmp(&b.norm()).then(a.im.total_cmp(&b.im)));
     let complex: DMatrix<Complex<f64>> = matrix.map(|v| Complex::new(v, 0.0));
     let balance_scale = scale_vector(&scale);
