@@ -10,7 +10,10 @@
 //! four-bearing stage under the Fig. 5b conditions), eigenvectors from complex
 //! inverse iteration (shifted slightly off each eigenvalue, deflating against
 //! vectors already found for the same eigenvalue so that repeated eigenvalues
-//! get independent vectors), mapped back through D.
+//! get independent vectors), mapped back through D. The singular value
+//! decomposition used to name a singular balance or to solve least squares
+//! goes through [`svd`] for the same reason: nalgebra's own loops forever on
+//! a matrix with a NaN entry.
 
 use nalgebra::{Complex, DMatrix, DVector};
 
@@ -82,6 +85,23 @@ pub fn spectral_radius(matrix: &DMatrix<f64>) -> Option<f64> {
     radius.is_finite().then_some(radius)
 }
 
+/// Iterations of the Schur and singular value iterations before they give up
+/// (each converges in a few per eigenvalue or singular value when it does).
+const MAX_ITERATIONS: usize = 20_000;
+
+/// The singular value decomposition of a matrix, `None` for a matrix with a
+/// non-finite entry or when the iteration does not converge.
+pub fn svd(
+    matrix: DMatrix<f64>,
+    compute_u: bool,
+    compute_v: bool,
+) -> Option<nalgebra::linalg::SVD<f64, nalgebra::Dyn, nalgebra::Dyn>> {
+    if matrix.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    matrix.try_svd(compute_u, compute_v, f64::EPSILON, MAX_ITERATIONS)
+}
+
 /// D^-1 A D for the balancing scale D.
 fn balanced(matrix: &DMatrix<f64>, scale: &[f64]) -> DMatrix<f64> {
     let n = matrix.nrows();
@@ -96,7 +116,9 @@ fn schur_eigenvalues(matrix: &DMatrix<f64>) -> Option<Vec<Complex<f64>>> {
     }
     [f64::EPSILON, 1e-14, 1e-13, 1e-12, 1e-10]
         .into_iter()
-        .find_map(|epsilon| nalgebra::linalg::Schur::try_new(matrix.clone(), epsilon, 20_000))
+        .find_map(|epsilon| {
+            nalgebra::linalg::Schur::try_new(matrix.clone(), epsilon, MAX_ITERATIONS)
+        })
         .map(|schur| schur.complex_eigenvalues().iter().copied().collect())
 }
 
@@ -177,6 +199,23 @@ fn inverse_iteration(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A NaN entry sends nalgebra's own singular value iteration into an
+    /// endless loop; these return `None` instead, and the same matrix
+    /// without it decomposes.
+    #[test]
+    fn a_matrix_with_a_nan_entry_has_no_spectrum_and_no_svd() {
+        let mut a = DMatrix::from_fn(4, 4, |i, j| (i * 4 + j) as f64 + 1.0);
+        let singular = svd(a.clone(), false, true).expect("a finite matrix decomposes");
+        // Rank 2: two singular values at round-off.
+        let mut values: Vec<f64> = singular.singular_values.iter().copied().collect();
+        values.sort_by(f64::total_cmp);
+        assert!(values[1] < 1e-12 * values[3], "{values:?}");
+        a[(1, 2)] = f64::NAN;
+        assert!(svd(a.clone(), false, true).is_none());
+        assert!(eigenvalues(&a).is_none());
+        assert!(spectral_radius(&a).is_none());
+    }
 
     #[test]
     fn eigenpairs_of_a_damped_oscillator_and_a_repeated_root() {

@@ -202,7 +202,9 @@ fn row_is_zero(jacobian: &DMatrix<f64>, equation: usize, unknowns: &[usize]) -> 
 /// The name of the unknown that dominates the null direction of a singular
 /// balance (the right singular vector of the smallest singular value).
 fn free_coordinate(system: &DMatrix<f64>, unknowns: &[usize], names: &[String]) -> String {
-    let svd = system.clone().svd(false, true);
+    let Some(svd) = crate::eigen::svd(system.clone(), false, true) else {
+        return "unknown".into();
+    };
     let Some(v_t) = svd.v_t else {
         return "unknown".into();
     };

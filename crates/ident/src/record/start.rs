@@ -16,6 +16,7 @@
 //! The full nonlinear fit then starts here ([`super::fit`]).
 
 use fistage_model::LugreParams;
+use fistage_model::eigen::svd;
 use nalgebra::{DMatrix, DVector};
 
 use super::data::Record;
@@ -326,10 +327,9 @@ fn constrained_solve(
                 }
             }
         }
-        let solution = h
-            .svd(true, true)
-            .solve(&g, 1e-13)
-            .unwrap_or_else(|_| DVector::zeros(p));
+        let solution = svd(h, true, true)
+            .and_then(|svd| svd.solve(&g, 1e-13).ok())
+            .unwrap_or_else(|| DVector::zeros(p));
         let mut coef = [if free_mass { 0.0 } else { mass }, 0.0, 0.0, 0.0];
         for (j, &c) in columns.iter().enumerate() {
             coef[c] = solution[j];
@@ -439,7 +439,7 @@ fn fit_presliding(
     }
     let a = DMatrix::from_fn(rows.len(), 2, |i, j| rows[i][j + 1]);
     let b = DVector::from_iterator(rows.len(), rows.iter().map(|r| r[0]));
-    let solution = a.svd(true, true).solve(&b, 1e-12).ok()?;
+    let solution = svd(a, true, true)?.solve(&b, 1e-12).ok()?;
     let (sigma0, c) = (solution[0], solution[1]);
     (sigma0.is_finite() && sigma0 > 0.0).then_some((sigma0, c))
 }
