@@ -36,9 +36,11 @@ pub struct BenchArgs {
     /// auto, native, imex, dop853, rosenbrock), each in its own rows of the table.
     #[arg(long, value_delimiter = ',')]
     pub engine: Vec<String>,
-    /// Signal whose error is reported.
-    #[arg(long, default_value = "encoder.position")]
-    pub signal: String,
+    /// Signal whose error is reported (default: the position read by the
+    /// scenario's servo sensor, else by the model's first sensor;
+    /// `encoder.position` on the shipped stages).
+    #[arg(long)]
+    pub signal: Option<String>,
     /// Time the FMI face only: fmi2DoStep from Rust and FMPy's simulate_fmu.
     #[arg(long)]
     pub fmu: bool,
@@ -173,11 +175,21 @@ fn max_deviation(
         a.signals(&loaded.model, &excitation),
         b.signals(&loaded.model, &excitation),
     );
+    let missing = || {
+        let names: Vec<&str> = loaded
+            .model
+            .signals()
+            .iter()
+            .map(|s| s.name.as_str())
+            .collect();
+        format!(
+            "no signal {signal} (the model's signals: {})",
+            names.join(", ")
+        )
+    };
     let (xa, xb) = (
-        ta.column(signal)
-            .with_context(|| format!("no signal {signal}"))?,
-        tb.column(signal)
-            .with_context(|| format!("no signal {signal}"))?,
+        ta.column(signal).with_context(missing)?,
+        tb.column(signal).with_context(missing)?,
     );
     anyhow::ensure!(xa.len() == xb.len(), "trajectories have different grids");
     let worst = xa
@@ -187,6 +199,23 @@ fn max_deviation(
         .fold(0.0, f64::max);
     let size = xb.iter().map(|v| v.abs()).fold(0.0, f64::max);
     Ok((worst, worst / size))
+}
+
+/// The signal whose error the tables report: `--signal`, else the position
+/// read by the servo's sensor, else by the model's first sensor.
+fn error_signal(args: &BenchArgs, loaded: &Loaded) -> anyhow::Result<String> {
+    if let Some(signal) = &args.signal {
+        return Ok(signal.clone());
+    }
+    let model = &loaded.model;
+    let sensor = model
+        .controller()
+        .and_then(|controller| model.sensors().get(controller.sensor))
+        .or_else(|| model.sensors().first())
+        .with_context(
+            || "the model has no sensor whose position to compare: name a signal with --signal",
+        )?;
+    Ok(format!("{}.position", sensor.name))
 }
 
 /// Runs the benchmark and prints Markdown.
@@ -343,6 +372,7 @@ fn ident_table(repeat: usize) -> anyhow::Result<()> {
 
 fn engine_table(args: &BenchArgs, scenario: &Path, rtols: &[f64]) -> anyhow::Result<()> {
     let loaded = fistage_model::load(scenario)?;
+    let signal = error_signal(args, &loaded)?;
     let engine = engine_for(&loaded.scenario);
     let timed: Vec<Box<dyn Engine>> = if args.engine.is_empty() {
         vec![engine_for(&loaded.scenario)]
@@ -366,7 +396,7 @@ fn engine_table(args: &BenchArgs, scenario: &Path, rtols: &[f64]) -> anyhow::Res
         simulated,
         engine.name(),
         args.repeat,
-        args.signal,
+        signal,
         args.reference_rtol
     );
     println!(
@@ -381,12 +411,8 @@ fn engine_table(args: &BenchArgs, scenario: &Path, rtols: &[f64]) -> anyhow::Res
         let mut first = None;
         for engine in &timed {
             let timing = time_run(&loaded, engine.as_ref(), rtol, args.repeat)?;
-            let (error, relative) = max_deviation(
-                &loaded,
-                &timing.trajectory,
-                &reference.trajectory,
-                &args.signal,
-            )?;
+            let (error, relative) =
+                max_deviation(&loaded, &timing.trajectory, &reference.trajectory, &signal)?;
             let counts = timing.trajectory.stats.counts;
             println!(
                 "| {rtol:.0e} | {:.2} | {:.2} | {:.0} | {} | {} | {} | {error:.2e} | {relative:.2e} | fistage {} |",
@@ -427,12 +453,8 @@ fn engine_table(args: &BenchArgs, scenario: &Path, rtols: &[f64]) -> anyhow::Res
         for peer in peers {
             match peer {
                 Ok(run) => {
-                    let (error, relative) = max_deviation(
-                        &loaded,
-                        &run.trajectory,
-                        &reference.trajectory,
-                        &args.signal,
-                    )?;
+                    let (error, relative) =
+                        max_deviation(&loaded, &run.trajectory, &reference.trajectory, &signal)?;
                     let (steps, rejected) = if run.steps_known {
                         (
                             run.counts.steps.to_string(),
@@ -530,6 +552,7 @@ fn p2p_difference(
 fn engines_table(args: &BenchArgs, scenario: &Path) -> anyhow::Result<()> {
     use fistage_sim::rapier_engine::{RapierEngine, rapier_step};
     let loaded = fistage_model::load(scenario)?;
+    let signal = error_signal(args, &loaded)?;
     let native = fistage_sim::NativeEngine;
     eprintln!("reference run at rtol {:e} ...", args.reference_rtol);
     let reference = time_run(&loaded, &native, args.reference_rtol, 1)?;
@@ -538,7 +561,7 @@ fn engines_table(args: &BenchArgs, scenario: &Path) -> anyhow::Result<()> {
     println!(
         "`{}` ({simulated} s simulated; median of {repeat} runs; errors of `{}` against native at rtol {:e}; p2p over the window {:?} s)\n",
         scenario.display(),
-        args.signal,
+        signal,
         args.reference_rtol,
         loaded.scenario.window
     );
@@ -548,18 +571,9 @@ fn engines_table(args: &BenchArgs, scenario: &Path) -> anyhow::Result<()> {
     println!("|---|---|---|---|---|---|---|---|---|");
     let row = |engine: &dyn Engine, setting: String, rtol: f64| -> anyhow::Result<()> {
         let timing = time_run(&loaded, engine, rtol, repeat)?;
-        let (error, relative) = max_deviation(
-            &loaded,
-            &timing.trajectory,
-            &reference.trajectory,
-            &args.signal,
-        )?;
-        let p2p = p2p_difference(
-            &loaded,
-            &timing.trajectory,
-            &reference.trajectory,
-            &args.signal,
-        )?;
+        let (error, relative) =
+            max_deviation(&loaded, &timing.trajectory, &reference.trajectory, &signal)?;
+        let p2p = p2p_difference(&loaded, &timing.trajectory, &reference.trajectory, &signal)?;
         let counts = timing.trajectory.stats.counts;
         println!(
             "| {} | {setting} | {:.3} | {:.1} | {} | {} | {error:.2e} | {relative:.2e} | {p2p:.2e} |",
@@ -607,13 +621,14 @@ fn stiffness_table(args: &BenchArgs) -> anyhow::Result<()> {
         .clone()
         .unwrap_or_else(|| PathBuf::from("scenarios/coupling/friction20_traverse.toml"));
     let base = fistage_model::load(&scenario)?;
+    let signal = error_signal(args, &base)?;
     let rtol = args.rtol.first().copied().unwrap_or(1e-6);
     let repeat = args.repeat.min(3);
     println!(
         "`{}` ({} s simulated, rtol {rtol:e}, median of {repeat} runs; `{}` statistics over the window {:?} s)\n",
         scenario.display(),
         base.scenario.duration,
-        args.signal,
+        signal,
         base.scenario.window
     );
     println!(
@@ -646,9 +661,9 @@ fn stiffness_table(args: &BenchArgs) -> anyhow::Result<()> {
             );
             let stats = summary
                 .iter()
-                .find(|s| s.name == args.signal)
+                .find(|s| s.name == signal)
                 .map(|s| s.stats)
-                .with_context(|| format!("no signal {}", args.signal))?;
+                .with_context(|| format!("no signal {signal}"))?;
             let counts = timing.trajectory.stats.counts;
             println!(
                 "| {factor} | {} | {:.3} | {} | {} | {} | {:.5e} | {:.5e} |",

@@ -1246,6 +1246,79 @@ fn bench_rows(table: &str, rtol: &str) -> Vec<Vec<String>> {
         .collect()
 }
 
+/// `bench --scenario` reports the error of the position the servo's sensor
+/// reads, whatever the robot file calls it: the Fig. 5b stage with its
+/// encoder renamed gives the same error as the original, and naming a signal
+/// the model lacks lists the ones it has.
+#[test]
+fn bench_reports_the_servo_sensor_whatever_its_name() {
+    let dir = scratch("bench-sensor");
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    let urdf = std::fs::read_to_string(repository().join("robots/stage_1dof_fi.urdf"))
+        .expect("robot file");
+    assert!(urdf.contains("name=\"encoder\""));
+    let renamed = dir.join("stage_scale.urdf");
+    std::fs::write(&renamed, urdf.replace("name=\"encoder\"", "name=\"scale\""))
+        .expect("renamed robot");
+    let original = dir.join("original.toml");
+    std::fs::write(&original, fig05b_for_a_second("")).expect("scenario");
+    let scale = dir.join("scale.toml");
+    let text = fig05b_for_a_second("")
+        .replace("sensor = \"encoder\"", "sensor = \"scale\"")
+        .replace(
+            &format!(
+                "{:?}",
+                repository()
+                    .join("robots/stage_1dof_fi.urdf")
+                    .display()
+                    .to_string()
+            ),
+            &format!("{:?}", renamed.display().to_string()),
+        );
+    std::fs::write(&scale, text).expect("scenario");
+    let bench = |scenario: &Path, extra: &[&str]| {
+        let mut command = fistage();
+        command.args([
+            "bench",
+            "--rtol",
+            "1e-6",
+            "--reference-rtol",
+            "1e-10",
+            "--repeat",
+            "1",
+        ]);
+        command
+            .args(["--engine", "native", "--scenario"])
+            .arg(scenario)
+            .args(extra);
+        command.output().expect("fistage runs")
+    };
+    let error_of = |output: &std::process::Output| -> String {
+        let table = String::from_utf8_lossy(&output.stdout).to_string();
+        assert!(
+            output.status.success(),
+            "{table}{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        bench_rows(&table, "1e-6")[0][8].clone()
+    };
+    let renamed_run = bench(&scale, &[]);
+    assert!(String::from_utf8_lossy(&renamed_run.stdout).contains("error of `scale.position`"));
+    let (renamed_error, original_error) =
+        (error_of(&renamed_run), error_of(&bench(&original, &[])));
+    assert_eq!(renamed_error, original_error);
+    let relative: f64 = renamed_error.parse().expect("a number");
+    assert!(relative > 0.0 && relative < 1e-3, "{relative:e}");
+    let missing = bench(&scale, &["--signal", "encoder.position"]);
+    assert!(!missing.status.success());
+    let message = String::from_utf8_lossy(&missing.stderr);
+    assert!(
+        message.contains("no signal encoder.position") && message.contains("scale.position"),
+        "{message}"
+    );
+    std::fs::remove_dir_all(dir).ok();
+}
+
 /// `bench --peers`: CVODE's BDF (exact Jacobian) and Adams, and SciPy's
 /// solve_ivp through the package's plant, integrate the same model from the
 /// same start on the same grid as the native engine. Each is an independent
