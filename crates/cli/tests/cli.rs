@@ -1319,6 +1319,38 @@ fn bench_reports_the_servo_sensor_whatever_its_name() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// The fixed-step rapier engine has no tolerance to tighten, so its bench
+/// reference is the same engine at a quarter of its step: the error it
+/// reports is the step's own, not zero (a run against itself).
+#[test]
+fn bench_measures_a_fixed_step_engine_against_a_finer_step() {
+    let dir = scratch("bench-rapier");
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    let scenario = dir.join("fig05b_rapier.toml");
+    let text = fig05b_for_a_second("[solver]\nengine = \"rapier\"\n")
+        .replace("duration = 1.0", "duration = 0.2");
+    std::fs::write(&scenario, text).expect("scenario");
+    let table = succeeds(&[
+        "bench".as_ref(),
+        "--rtol".as_ref(),
+        "1e-6".as_ref(),
+        "--repeat".as_ref(),
+        "1".as_ref(),
+        "--scenario".as_ref(),
+        scenario.as_os_str(),
+    ]);
+    assert!(
+        table.contains("against the same engine at a quarter of its step"),
+        "{table}"
+    );
+    let row = &bench_rows(&table, "1e-6")[0];
+    assert!(row[9].contains("rapier"), "{row:?}");
+    let relative: f64 = row[8].parse().expect("a number");
+    // First order in the step: visible, and well inside the signal's range.
+    assert!(relative > 1e-6 && relative < 5e-2, "{relative:e}");
+    std::fs::remove_dir_all(dir).ok();
+}
+
 /// `bench --peers`: CVODE's BDF (exact Jacobian) and Adams, and SciPy's
 /// solve_ivp through the package's plant, integrate the same model from the
 /// same start on the same grid as the native engine. Each is an independent
