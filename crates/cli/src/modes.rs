@@ -57,12 +57,36 @@ pub fn run(args: &ModesArgs) -> anyhow::Result<()> {
         Which::Slipping => vec![EquilibriumKind::Slipping],
         Which::Both => vec![EquilibriumKind::Sticking, EquilibriumKind::Slipping],
     };
+    // With both asked for, an equilibrium the stage does not have (no
+    // slipping one where the counter-surfaces stand still) is named, not fatal.
     let mut analyses = Vec::new();
+    let mut unavailable = Vec::new();
     for kind in kinds {
-        let analysis = modal_analysis(&loaded.model, &inputs, kind, &start)
-            .with_context(|| format!("{}: modal analysis", args.scenario.display()))?;
-        analyses.push(analysis);
+        match modal_analysis(&loaded.model, &inputs, kind, &start) {
+            Ok(analysis) => analyses.push(analysis),
+            Err(e) if args.equilibrium == Which::Both => unavailable.push(serde_json::json!({
+                "equilibrium": match kind {
+                    EquilibriumKind::Sticking => "sticking",
+                    EquilibriumKind::Slipping => "slipping",
+                },
+                "reason": e.to_string(),
+            })),
+            Err(e) => {
+                return Err(anyhow::Error::new(e)
+                    .context(format!("{}: modal analysis", args.scenario.display())));
+            }
+        }
     }
+    anyhow::ensure!(
+        !analyses.is_empty(),
+        "{}: modal analysis: no equilibrium to analyse: {}",
+        args.scenario.display(),
+        unavailable
+            .iter()
+            .map(|u| u["reason"].as_str().unwrap_or_default().to_string())
+            .collect::<Vec<_>>()
+            .join("; ")
+    );
     let out_dir = args
         .out
         .clone()
@@ -73,6 +97,7 @@ pub fn run(args: &ModesArgs) -> anyhow::Result<()> {
         "scenario": scenario.file.display().to_string(),
         "slip_velocity_m_per_s": -inputs.platform_velocity,
         "analyses": analyses,
+        "unavailable": unavailable,
     });
     let text = serde_json::to_string_pretty(&json)?;
     std::fs::write(staging.join("modes.json"), text.clone() + "\n")
@@ -92,6 +117,9 @@ pub fn run(args: &ModesArgs) -> anyhow::Result<()> {
     } else {
         for analysis in &analyses {
             print_table(analysis);
+        }
+        for missing in &unavailable {
+            println!("{}", missing["reason"].as_str().unwrap_or_default());
         }
         print_routh_hurwitz(&loaded, inputs.platform_velocity);
         println!(

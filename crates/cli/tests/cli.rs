@@ -591,6 +591,59 @@ fn check_refuses_what_run_refuses() {
 
 /// `fistage modes` writes its result but exits non-zero when a verdict is
 /// undetermined, and says why; modes.json holds no non-finite number.
+/// A stage whose counter-surfaces stand still has no slipping equilibrium
+/// (the force balance leaves the bearing free): `modes` analyses the sticking
+/// one, names the missing one in its output and modes.json, and fails only
+/// when the missing one was asked for alone.
+#[test]
+fn modes_names_a_missing_equilibrium_instead_of_failing() {
+    let dir = scratch("modes-missing");
+    std::fs::create_dir_all(&dir).expect("scratch");
+    let file = dir.join("standing_platform.toml");
+    std::fs::write(
+        &file,
+        fig05b_for_a_second("").replace("velocity = 0.02", "velocity = 0.0"),
+    )
+    .expect("write");
+    let out = dir.join("out");
+    let both = fistage()
+        .arg("modes")
+        .arg(&file)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&both.stdout);
+    assert!(
+        both.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&both.stderr)
+    );
+    assert!(stdout.contains("sticking equilibrium: stable"), "{stdout}");
+    assert!(stdout.contains("no Slipping equilibrium"), "{stdout}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("modes.json")).expect("modes.json"))
+            .expect("JSON");
+    assert_eq!(json["analyses"].as_array().map(Vec::len), Some(1));
+    assert_eq!(json["analyses"][0]["equilibrium"], "sticking");
+    assert_eq!(json["unavailable"][0]["equilibrium"], "slipping");
+    assert!(
+        json["unavailable"][0]["reason"]
+            .as_str()
+            .is_some_and(|r| r.contains("singular")),
+        "{json}"
+    );
+    let alone = fistage()
+        .args(["modes", "--equilibrium", "slipping", "--force", "--out"])
+        .arg(&out)
+        .arg(&file)
+        .output()
+        .expect("runs");
+    assert!(!alone.status.success());
+    assert!(String::from_utf8_lossy(&alone.stderr).contains("no Slipping equilibrium"));
+    std::fs::remove_dir_all(dir).ok();
+}
+
 #[test]
 fn modes_exits_non_zero_on_an_undetermined_verdict() {
     let dir = scratch("modes-undetermined");
