@@ -335,10 +335,7 @@ pub fn modal_analysis(
     };
     let (verdict, undetermined_reason) = verdict(&jacobian, &pairs, &modes, max_real_part);
     Ok(ModalAnalysis {
-        equilibrium: match kind {
-            EquilibriumKind::Sticking => "sticking".into(),
-            EquilibriumKind::Slipping => "slipping".into(),
-        },
+        equilibrium: kind.name().into(),
         state,
         coordinates,
         modes,

@@ -9,11 +9,11 @@ use std::time::Instant;
 
 use anyhow::Context;
 use fistage_model::Loaded;
-
-use crate::bench_matched::{AccuracyRow, print_matched};
 use fistage_sim::{
     Engine, Excitation, ScenarioExcitation, SimSettings, Trajectory, engine_for, initial_state,
 };
+
+use crate::bench_matched::{AccuracyRow, print_matched};
 
 /// Arguments of `fistage bench`.
 #[derive(clap::Args)]
@@ -212,9 +212,12 @@ fn error_signal(args: &BenchArgs, loaded: &Loaded) -> anyhow::Result<String> {
         .controller()
         .and_then(|controller| model.sensors().get(controller.sensor))
         .or_else(|| model.sensors().first())
-        .with_context(
-            || "the model has no sensor whose position to compare: name a signal with --signal",
-        )?;
+        .with_context(|| {
+            format!(
+                "{}: the model has no sensor whose position to compare: name a signal with --signal",
+                loaded.scenario.file.display()
+            )
+        })?;
     Ok(format!("{}.position", sensor.name))
 }
 

@@ -24,6 +24,15 @@ pub enum Which {
     Both,
 }
 
+/// An equilibrium asked for that the stage does not have, and why.
+#[derive(serde::Serialize)]
+struct Unavailable {
+    /// `sticking` or `slipping`.
+    equilibrium: &'static str,
+    /// Why it was not found.
+    reason: String,
+}
+
 /// Arguments of `fistage modes`.
 #[derive(clap::Args)]
 pub struct ModesArgs {
@@ -64,13 +73,10 @@ pub fn run(args: &ModesArgs) -> anyhow::Result<()> {
     for kind in kinds {
         match modal_analysis(&loaded.model, &inputs, kind, &start) {
             Ok(analysis) => analyses.push(analysis),
-            Err(e) if args.equilibrium == Which::Both => unavailable.push(serde_json::json!({
-                "equilibrium": match kind {
-                    EquilibriumKind::Sticking => "sticking",
-                    EquilibriumKind::Slipping => "slipping",
-                },
-                "reason": e.to_string(),
-            })),
+            Err(e) if args.equilibrium == Which::Both => unavailable.push(Unavailable {
+                equilibrium: kind.name(),
+                reason: e.to_string(),
+            }),
             Err(e) => {
                 return Err(anyhow::Error::new(e)
                     .context(format!("{}: modal analysis", args.scenario.display())));
@@ -83,7 +89,7 @@ pub fn run(args: &ModesArgs) -> anyhow::Result<()> {
         args.scenario.display(),
         unavailable
             .iter()
-            .map(|u| u["reason"].as_str().unwrap_or_default().to_string())
+            .map(|u| u.reason.as_str())
             .collect::<Vec<_>>()
             .join("; ")
     );
@@ -119,7 +125,7 @@ pub fn run(args: &ModesArgs) -> anyhow::Result<()> {
             print_table(analysis);
         }
         for missing in &unavailable {
-            println!("{}", missing["reason"].as_str().unwrap_or_default());
+            println!("{}", missing.reason);
         }
         print_routh_hurwitz(&loaded, inputs.platform_velocity);
         println!(

@@ -26,6 +26,16 @@ pub enum EquilibriumKind {
     Slipping,
 }
 
+impl EquilibriumKind {
+    /// Its name in reports and JSON: `sticking` or `slipping`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Sticking => "sticking",
+            Self::Slipping => "slipping",
+        }
+    }
+}
+
 /// Why no equilibrium was found.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum EquilibriumError {
