@@ -333,10 +333,17 @@ impl Controller {
     /// Writes the rates of the servo's own states into `dx`.
     #[inline(always)]
     pub(crate) fn write_rates<S: Scalar>(&self, values: &ServoValues<S>, dx: &mut [S]) {
-        for (slot, rate) in self.state_slots().iter().zip(values.rates) {
-            if let Some(index) = slot {
-                dx[*index] = rate;
-            }
+        // The slots of [`Self::state_slots`], read straight off the
+        // controller: this runs in every evaluation.
+        if let Some(index) = self.integral_index {
+            dx[index] = values.rates[0];
+        }
+        if let Some(feedforward) = &self.feedforward {
+            let (start, count) = (feedforward.state_index, feedforward.n_states());
+            dx[start..start + count].copy_from_slice(&values.rates[1..1 + count]);
+        }
+        if let Some(observer) = &self.observer {
+            dx[observer.state_index] = values.rates[4];
         }
     }
 
@@ -350,5 +357,71 @@ impl Controller {
             .into_iter()
             .zip(rates)
             .filter_map(|(slot, rate)| slot.map(|i| (i, rate)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every layout of the servo's own states: an integral or none, no
+    /// feedforward, a static one (one state) or one with a virtual bearing
+    /// (three), an observer or none, at scattered indices.
+    fn layouts() -> Vec<Controller> {
+        let feedforwards = [
+            None,
+            Some((None, 4)),
+            Some((
+                Some(VirtualBearing {
+                    mass: 0.1,
+                    stiffness: 1e4,
+                    damping: 1.0,
+                }),
+                6,
+            )),
+        ];
+        let mut layouts = Vec::new();
+        for integral_index in [None, Some(2)] {
+            for feedforward in &feedforwards {
+                for observer in [None, Some(11)] {
+                    layouts.push(Controller {
+                        sensor: 0,
+                        actuator: 0,
+                        k: 1.0,
+                        c: 1.0,
+                        k_i: if integral_index.is_some() { 1.0 } else { 0.0 },
+                        integral_index,
+                        feedforward: feedforward.map(|(bearing, state_index)| Feedforward {
+                            element: None,
+                            model: FrictionModel::Lugre(LugreParams::paper_table1()),
+                            bearing,
+                            state_index,
+                        }),
+                        observer: observer.map(|state_index| Observer {
+                            nominal_mass: 1.0,
+                            cutoff: 10.0,
+                            state_index,
+                        }),
+                    });
+                }
+            }
+        }
+        layouts
+    }
+
+    #[test]
+    fn write_rates_writes_exactly_the_listed_state_rates() {
+        let mut values = ServoValues::<f64>::zero();
+        values.rates = [1.0, 2.0, 3.0, 4.0, 5.0];
+        for controller in layouts() {
+            let mut dx = [f64::NAN; 12];
+            controller.write_rates(&values, &mut dx);
+            let listed: Vec<(usize, f64)> = controller.state_rates(&values).collect();
+            for (index, rate) in &listed {
+                assert_eq!(dx[*index], *rate, "{controller:?}");
+            }
+            let written = dx.iter().filter(|r| !r.is_nan()).count();
+            assert_eq!(written, listed.len(), "{controller:?}: {dx:?}");
+        }
     }
 }

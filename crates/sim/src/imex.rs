@@ -208,7 +208,6 @@ pub struct ImexRungeKutta {
     k: [Vec<f64>; STAGES],
     stage: Vec<f64>,
     x_new: Vec<f64>,
-    error: Vec<f64>,
     /// Start of the last accepted step: state and derivative (dense output).
     x_previous: Vec<f64>,
     f_previous: Vec<f64>,
@@ -269,7 +268,6 @@ impl ImexRungeKutta {
             k: std::array::from_fn(|_| zeros()),
             stage: zeros(),
             x_new: zeros(),
-            error: zeros(),
             x_previous: x0.to_vec(),
             f_previous: zeros(),
             f_end: zeros(),
@@ -362,56 +360,33 @@ impl ImexRungeKutta {
         system: &mut S,
         h: f64,
     ) -> f64 {
-        let (n, t) = (state_count::<N>(self.n), self.t);
-        let x = &self.x[..n];
-        let stage = &mut self.stage[..n];
-        for i in 1..STAGES {
-            let (done, rest) = self.k.split_at_mut(i);
-            // Every state by the explicit row, then the implicit states again
-            // by theirs. The newest stage enters last, so the rest is summed
-            // while its evaluation is still in flight.
-            let (older, newest) = done.split_at(i - 1);
-            let newest = &newest[0][..n];
-            stage.fill(0.0);
-            for (j, k) in older.iter().enumerate() {
-                let a = EXPLICIT[i][j];
-                if a != 0.0 {
-                    for (s, k) in stage.iter_mut().zip(&k[..n]) {
-                        *s += a * k;
-                    }
-                }
-            }
-            let a_newest = h * EXPLICIT[i][i - 1];
-            for m in 0..n {
-                stage[m] = (x[m] + h * stage[m]) + a_newest * newest[m];
-            }
-            for &m in &self.implicit_states {
-                let mut sum = 0.0;
-                for (j, k) in older.iter().enumerate() {
-                    sum += IMPLICIT[i][j] * k[m];
-                }
-                stage[m] = (x[m] + h * sum) + (h * IMPLICIT[i][i - 1]) * newest[m];
-            }
-            system.rhs_implicit(t + NODES[i] * h, stage, h * GAMMA, &mut rest[0][..n]);
-        }
+        let n = state_count::<N>(self.n);
+        self.stage_sized::<N, 1, S>(system, h);
+        self.stage_sized::<N, 2, S>(system, h);
+        self.stage_sized::<N, 3, S>(system, h);
+        self.stage_sized::<N, 4, S>(system, h);
+        self.stage_sized::<N, 5, S>(system, h);
+        self.stage_sized::<N, 6, S>(system, h);
+        self.stage_sized::<N, 7, S>(system, h);
         self.counts.rhs_evaluations += (STAGES - 1) as u64;
+        let k: [&[f64]; STAGES] = std::array::from_fn(|j| &self.k[j][..n]);
+        let x = &self.x[..n];
         let x_new = &mut self.x_new[..n];
-        let error = &mut self.error[..n];
-        x_new.fill(0.0);
-        error.fill(0.0);
-        for (j, k) in self.k.iter().enumerate() {
-            let (w, e) = (WEIGHTS[j], WEIGHTS[j] - EMBEDDED[j]);
-            for ((x_new, error), k) in x_new.iter_mut().zip(error.iter_mut()).zip(&k[..n]) {
-                *x_new += w * k;
-                *error += e * k;
-            }
-        }
+        let stage = &self.stage[..n];
         let atol = &self.tol.atol[..n];
         let mut sum = -0.0;
         for m in 0..n {
-            x_new[m] = x[m] + h * x_new[m];
+            let (mut increment, mut error) = (-0.0, -0.0);
+            for (j, k) in k.iter().enumerate() {
+                let (w, e) = (WEIGHTS[j], WEIGHTS[j] - EMBEDDED[j]);
+                if w != 0.0 || e != 0.0 {
+                    increment += w * k[m];
+                    error += e * k[m];
+                }
+            }
+            x_new[m] = x[m] + h * increment;
             let scale = atol[m] + self.tol.rtol * x[m].abs().max(x_new[m].abs());
-            let e = h * error[m] / scale;
+            let e = h * error / scale;
             sum += e * e;
         }
         // The implicit tableau is stiffly accurate: its solution is its last
@@ -427,6 +402,46 @@ impl ImexRungeKutta {
             self.non_finite = (0..n).find(|&m| !x_new[m].is_finite());
             f64::INFINITY
         }
+    }
+
+    /// Stage `I` of a trial step of size `h`: its point from the earlier
+    /// stages (every state by the explicit row, then the implicit states
+    /// again by theirs), then its evaluation into slot `I`. With `I` and `N`
+    /// constants the rows' zeros fold away and the loops unroll. The newest
+    /// stage enters last, so the rest is summed while its evaluation is
+    /// still in flight.
+    #[inline(always)]
+    fn stage_sized<const N: usize, const I: usize, S: SplitSystem + ?Sized>(
+        &mut self,
+        system: &mut S,
+        h: f64,
+    ) {
+        let n = state_count::<N>(self.n);
+        let (done, rest) = self.k.split_at_mut(I);
+        let k: [&[f64]; I] = std::array::from_fn(|j| &done[j][..n]);
+        let x = &self.x[..n];
+        let stage = &mut self.stage[..n];
+        let a_newest = h * EXPLICIT[I][I - 1];
+        for m in 0..n {
+            let mut sum = -0.0;
+            for (j, k) in k[..I - 1].iter().enumerate() {
+                if EXPLICIT[I][j] != 0.0 {
+                    sum += EXPLICIT[I][j] * k[m];
+                }
+            }
+            stage[m] = (x[m] + h * sum) + a_newest * k[I - 1][m];
+        }
+        let a_newest = h * IMPLICIT[I][I - 1];
+        for &m in &self.implicit_states {
+            let mut sum = -0.0;
+            for (j, k) in k[..I - 1].iter().enumerate() {
+                if IMPLICIT[I][j] != 0.0 {
+                    sum += IMPLICIT[I][j] * k[m];
+                }
+            }
+            stage[m] = (x[m] + h * sum) + a_newest * k[I - 1][m];
+        }
+        system.rhs_implicit(self.t + NODES[I] * h, stage, h * GAMMA, &mut rest[0][..n]);
     }
 
     /// Moves to the new point and evaluates f there (the next first stage).
