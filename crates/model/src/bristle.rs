@@ -37,7 +37,7 @@ impl<S: Scalar> BristleStage<S> {
 
     /// Friction force and bristle rate of contact `k` at slip velocity
     /// `slip`, where `z` is the state's bristle entry.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn law(&mut self, k: usize, contact: &FrictionContact, slip: S, z: S) -> (S, S) {
         if self.step == 0.0 {
             contact.lugre.force_and_z_rate_of(slip, z)
