@@ -421,25 +421,11 @@ impl ImexRungeKutta {
         let k: [&[f64]; I] = std::array::from_fn(|j| &done[j][..n]);
         let x = &self.x[..n];
         let stage = &mut self.stage[..n];
-        let a_newest = h * EXPLICIT[I][I - 1];
         for m in 0..n {
-            let mut sum = -0.0;
-            for (j, k) in k[..I - 1].iter().enumerate() {
-                if EXPLICIT[I][j] != 0.0 {
-                    sum += EXPLICIT[I][j] * k[m];
-                }
-            }
-            stage[m] = (x[m] + h * sum) + a_newest * k[I - 1][m];
+            stage[m] = stage_entry(&EXPLICIT[I], &k, x[m], h, m);
         }
-        let a_newest = h * IMPLICIT[I][I - 1];
         for &m in &self.implicit_states {
-            let mut sum = -0.0;
-            for (j, k) in k[..I - 1].iter().enumerate() {
-                if IMPLICIT[I][j] != 0.0 {
-                    sum += IMPLICIT[I][j] * k[m];
-                }
-            }
-            stage[m] = (x[m] + h * sum) + a_newest * k[I - 1][m];
+            stage[m] = stage_entry(&IMPLICIT[I], &k, x[m], h, m);
         }
         system.rhs_implicit(self.t + NODES[I] * h, stage, h * GAMMA, &mut rest[0][..n]);
     }
@@ -490,6 +476,25 @@ impl ImexRungeKutta {
     pub fn previous_time(&self) -> f64 {
         self.t_previous
     }
+}
+
+/// Entry `m` of stage `I`'s point by one tableau row: `x + h sum_j row_j k_j`,
+/// the newest stage added last.
+#[inline(always)]
+fn stage_entry<const I: usize>(
+    row: &[f64; STAGES],
+    k: &[&[f64]; I],
+    x: f64,
+    h: f64,
+    m: usize,
+) -> f64 {
+    let mut sum = -0.0;
+    for (j, k) in k[..I - 1].iter().enumerate() {
+        if row[j] != 0.0 {
+            sum += row[j] * k[m];
+        }
+    }
+    (x + h * sum) + (h * row[I - 1]) * k[I - 1][m]
 }
 
 #[cfg(test)]
