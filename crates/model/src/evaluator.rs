@@ -56,6 +56,30 @@ impl Evaluator {
         }
     }
 
+    /// The slip velocity of every friction contact at state `x`, contact order.
+    #[inline]
+    pub(crate) fn slip_velocities(
+        &self,
+        model: &Structure,
+        x: &[f64],
+        inputs: &InputValues<f64>,
+        out: &mut [f64],
+        ws: &mut Workspace<f64>,
+    ) {
+        match self {
+            Self::ConstantJacobian(map) => {
+                map.slip_velocities(model.layout.nq, x, inputs.platform_velocity, out)
+            }
+            Self::RootedBodies(plan) => {
+                plan.slip_velocities(x, inputs.platform_velocity, out, &mut ws.rooted)
+            }
+            Self::General => {
+                model.evaluate_values(x, inputs, ws);
+                out.copy_from_slice(&ws.elements.slip_velocity[..out.len()]);
+            }
+        }
+    }
+
     /// The state derivative, in any scalar type.
     #[inline]
     pub(crate) fn rhs<S: Scalar>(

@@ -195,6 +195,20 @@ impl Model {
         self.structure.evaluate(x, inputs, ws);
     }
 
+    /// The slip velocity of every friction contact at state x, m/s, in
+    /// contact order: where one changes sign, the bristle law has a kink.
+    #[inline]
+    pub fn slip_velocities(
+        &self,
+        x: &[f64],
+        inputs: &InputValues<f64>,
+        out: &mut [f64],
+        ws: &mut Workspace,
+    ) {
+        self.evaluator
+            .slip_velocities(&self.structure, x, inputs, out, ws);
+    }
+
     /// Writes every output signal (see [`Model::signals`]) at state x.
     pub fn outputs(&self, x: &[f64], inputs: &Inputs, out: &mut [f64], ws: &mut Workspace) {
         self.structure.outputs(x, inputs, out, ws);

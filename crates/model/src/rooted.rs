@@ -407,17 +407,29 @@ impl RootedPlan {
 
     /// Poses and velocities of every body, and the position rates.
     fn body_states<S: Scalar>(&self, x: &[S], dx: &mut [S], scratch: &mut RootedScratch<S>) {
+        self.body_motion(x, scratch);
+        for body in &self.floating {
+            let (q0, v0) = (body.q0, body.v0);
+            let (w, i, j, k) = (x[q0 + 3], x[q0 + 4], x[q0 + 5], x[q0 + 6]);
+            let angular = Vector3::new(x[v0 + 3], x[v0 + 4], x[v0 + 5]);
+            dx[q0..q0 + 3].copy_from_slice(&x[v0..v0 + 3]);
+            // Omega in the joint frame, the one the quaternion rotates into.
+            dx[q0 + 3..q0 + 7].copy_from_slice(&quaternion_rate([w, i, j, k], angular));
+        }
+        for body in &self.rails {
+            dx[body.q0] = x[body.v0];
+        }
+    }
+
+    /// Poses and velocities of every body (world frame), forces cleared.
+    #[inline(always)]
+    fn body_motion<S: Scalar>(&self, x: &[S], scratch: &mut RootedScratch<S>) {
         for (body, state) in self.floating.iter().zip(&mut scratch.floating) {
             let (q0, v0) = (body.q0, body.v0);
             let offset = Vector3::new(x[q0], x[q0 + 1], x[q0 + 2]);
             let (w, i, j, k) = (x[q0 + 3], x[q0 + 4], x[q0 + 5], x[q0 + 6]);
             let linear = Vector3::new(x[v0], x[v0 + 1], x[v0 + 2]);
             let angular = Vector3::new(x[v0 + 3], x[v0 + 4], x[v0 + 5]);
-            dx[q0] = linear.x;
-            dx[q0 + 1] = linear.y;
-            dx[q0 + 2] = linear.z;
-            // Omega in the joint frame, the one the quaternion rotates into.
-            dx[q0 + 3..q0 + 7].copy_from_slice(&quaternion_rate([w, i, j, k], angular));
             let attitude = quaternion_rotation(w, i, j, k);
             let joint = cast_rotation::<S>(&body.joint_rotation);
             state.rotation = match &joint {
@@ -434,7 +446,22 @@ impl RootedPlan {
             state.position = x[body.q0];
             state.rate = x[body.v0];
             state.force = S::zero();
-            dx[body.q0] = state.rate;
+        }
+    }
+
+    /// The slip velocity of every friction contact at state `x`, contact
+    /// order: the bodies' motion and one reading per contact.
+    pub(crate) fn slip_velocities(
+        &self,
+        x: &[f64],
+        platform_velocity: f64,
+        out: &mut [f64],
+        scratch: &mut RootedScratch<f64>,
+    ) {
+        self.body_motion(x, scratch);
+        for (slip, contact) in out.iter_mut().zip(&self.frictions) {
+            let (_, velocity, _) = Self::reading(contact, scratch);
+            *slip = velocity - platform_velocity;
         }
     }
 

@@ -196,6 +196,22 @@ impl TranslationalMap {
         }
     }
 
+    /// The slip velocity of every friction contact (contact order) at state
+    /// `x`: one row product each.
+    #[inline]
+    pub(crate) fn slip_velocities(
+        &self,
+        nq: usize,
+        x: &[f64],
+        platform_velocity: f64,
+        out: &mut [f64],
+    ) {
+        let v = &x[nq..nq + self.nv];
+        for (k, slip) in out.iter_mut().enumerate() {
+            *slip = dot(&self.friction_rows[k * self.nv..(k + 1) * self.nv], v) - platform_velocity;
+        }
+    }
+
     /// [`Self::rhs`] through one kind of row tables.
     #[inline(always)]
     fn rhs_with<R: RowTable, S: Scalar>(

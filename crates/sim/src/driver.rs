@@ -2,7 +2,8 @@
 //! (a `fistage run`, a sweep point, a Lyapunov estimate, an FMU's
 //! communication step) goes through [`drive`]. It owns the ODE adaptor over
 //! the model, the absolute-tolerance formula, the segments between the
-//! inputs' discontinuities (the integrator restarts at each), the step
+//! inputs' discontinuities (the integrator restarts at each), the steps
+//! that end on the friction law's kinks ([`KinkPredictor`]), the step
 //! budget and the mapping of integrator failures to [`SimError`].
 
 use fistage_model::{InputValues, Model, Workspace};
@@ -12,6 +13,7 @@ use crate::dop853::Dop853;
 use crate::dopri::{DormandPrince, OdeSystem, StepCounts, StepFailure, Tolerances};
 use crate::excitation::Excitation;
 use crate::imex::{ImexRungeKutta, SplitSystem};
+use crate::kinks::KinkPredictor;
 use crate::rosenbrock::{JacobianSystem, Rosenbrock};
 use crate::settings::SimError;
 
@@ -49,6 +51,15 @@ impl<'a> ModelSystem<'a> {
             Some(inputs) => *inputs,
             None => self.excitation.inputs(t).values(),
         }
+    }
+}
+
+impl ModelSystem<'_> {
+    /// The slip velocity of every friction contact at (t, x).
+    #[inline]
+    fn slip_velocities(&mut self, t: f64, x: &[f64], out: &mut [f64]) {
+        let inputs = self.inputs(t);
+        self.model.slip_velocities(x, &inputs, out, self.workspace);
     }
 }
 
@@ -117,6 +128,10 @@ pub(crate) trait Integrating {
     fn interpolate(&mut self, system: &mut ModelSystem, t: f64, out: &mut [f64]);
     /// Steps, rejections and evaluations so far.
     fn counts(&self) -> StepCounts;
+    /// The state at [`Integrating::time`].
+    fn state(&self) -> &[f64];
+    /// The size the next step will try.
+    fn proposed_step(&self) -> f64;
 }
 
 /// Both integrators have the same stepping interface over different system traits.
@@ -142,6 +157,12 @@ macro_rules! integrating {
             fn counts(&self) -> StepCounts {
                 self.counts
             }
+            fn state(&self) -> &[f64] {
+                &self.x
+            }
+            fn proposed_step(&self) -> f64 {
+                self.h
+            }
         }
     };
 }
@@ -165,6 +186,12 @@ impl Integrating for Dop853 {
     }
     fn counts(&self) -> StepCounts {
         self.counts
+    }
+    fn state(&self) -> &[f64] {
+        &self.x
+    }
+    fn proposed_step(&self) -> f64 {
+        self.h
     }
 }
 
@@ -211,13 +238,22 @@ pub(crate) fn drive<I: Integrating>(
         (counts.steps - start.steps).saturating_add(counts.rejected - start.rejected)
     };
     let mut pace = Pace::new(integrator.time());
+    let mut kinks = KinkPredictor::new(model.frictions().len());
     for (segment, &t_stop) in ends.iter().enumerate() {
         if segment > 0 {
             integrator.restart(system);
         }
+        kinks.forget();
         while integrator.time() < t_stop {
+            let t = integrator.time();
+            kinks.record(t, |slips| {
+                system.slip_velocities(t, integrator.state(), slips)
+            });
+            let target = kinks
+                .next_crossing(integrator.proposed_step())
+                .map_or(t_stop, |crossing| crossing.min(t_stop));
             integrator
-                .advance(system, t_stop)
+                .advance(system, target)
                 .map_err(|failure| step_failure(model, failure))?;
             let steps = used(integrator.counts());
             if steps > max_steps {
