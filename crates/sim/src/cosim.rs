@@ -7,7 +7,7 @@
 use fistage_model::{Inputs, Model, Reference, ReferenceSample, Workspace};
 
 use crate::dopri::{Checkpoint, DormandPrince};
-use crate::driver::{ModelSystem, drive, tolerances};
+use crate::driver::{ModelSystem, drive, slip_floor, tolerances};
 use crate::excitation::Excitation;
 use crate::settings::SimError;
 
@@ -112,6 +112,7 @@ impl Stepper {
         }
         let t = &self.tolerances;
         let tolerances = tolerances(model, t.rtol, t.atol_scale, t.max_step);
+        let floor = slip_floor(model, &tolerances);
         let mut system = ModelSystem::new(model, excitation, workspace);
         let mut integrator = if self.checkpoint.h > 0.0 {
             DormandPrince::resume(&mut system, &self.checkpoint, tolerances)
@@ -127,6 +128,7 @@ impl Stepper {
             &mut system,
             t_end,
             t.max_steps_per_advance,
+            floor,
             |_, _| std::ops::ControlFlow::Continue(()),
         )?;
         if let Some(i) = integrator.x.iter().position(|v| !v.is_finite()) {

@@ -114,6 +114,18 @@ pub(crate) fn tolerances(
     }
 }
 
+/// The slip velocity below which a contact's sign changes are not worth a
+/// step of their own: the smallest absolute tolerance of a velocity state.
+/// A slip this small moves the bristle rate by less than the bristle
+/// state's own tolerance over a step, kink or not.
+pub(crate) fn slip_floor(model: &Model, tolerances: &Tolerances) -> f64 {
+    let layout = model.layout();
+    tolerances.atol[layout.nq..layout.nq + layout.nv]
+        .iter()
+        .copied()
+        .fold(f64::INFINITY, f64::min)
+}
+
 /// What the adaptive integrators share: step towards a stop time, restart
 /// after a discontinuity, interpolate inside the last step.
 pub(crate) trait Integrating {
@@ -228,6 +240,7 @@ pub(crate) fn drive<I: Integrating>(
     system: &mut ModelSystem,
     t_end: f64,
     max_steps: u64,
+    slip_floor: f64,
     mut after_step: impl FnMut(&mut I, &mut ModelSystem) -> ControlFlow<()>,
 ) -> Result<(), SimError> {
     let model = system.model;
@@ -238,7 +251,7 @@ pub(crate) fn drive<I: Integrating>(
         (counts.steps - start.steps).saturating_add(counts.rejected - start.rejected)
     };
     let mut pace = Pace::new(integrator.time());
-    let mut kinks = KinkPredictor::new(model.frictions().len());
+    let mut kinks = KinkPredictor::new(model.frictions().len(), slip_floor);
     for (segment, &t_stop) in ends.iter().enumerate() {
         if segment > 0 {
             integrator.restart(system);

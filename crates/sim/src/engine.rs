@@ -13,7 +13,7 @@ use fistage_model::{EngineKind, Inputs, Model, Scenario};
 
 use crate::dop853::Dop853;
 use crate::dopri::{DormandPrince, Tolerances};
-use crate::driver::{Integrating, ModelSystem, drive, tolerances};
+use crate::driver::{Integrating, ModelSystem, drive, slip_floor, tolerances};
 use crate::excitation::Excitation;
 use crate::imex::ImexRungeKutta;
 use crate::method::{Method, MethodChoice, choose_method};
@@ -83,6 +83,7 @@ fn integrate<I: Integrating>(
         &mut system,
         settings.t_end,
         settings.max_steps,
+        slip_floor(model, &settings_tolerances(model, settings)),
         |integrator, system| {
             while next_sample < times.len()
                 && times[next_sample] <= integrator.time() * (1.0 + 1e-14)

@@ -11,8 +11,10 @@
 //! slip velocity at the last three accepted step ends, and lets the step
 //! stop there. A crossing closer than a small fraction of the proposed step
 //! is taken to be at the step's start; one farther than the proposed step
-//! is left to a later step. The error control still judges every step: a
-//! prediction that misses only costs what the kink cost before.
+//! is left to a later step; a slip within a velocity tolerance of zero at
+//! all three step ends is round-off around a resting contact, not a kink
+//! worth a step. The error control still judges every step: a prediction
+//! that misses only costs what the kink cost before.
 
 /// Fraction of the proposed step within which a predicted crossing counts
 /// as at the start of the step (no step is cut for it). A kink at a
@@ -33,12 +35,17 @@ pub(crate) struct KinkPredictor {
     newest: usize,
     /// How many of the three are known since the last [`Self::forget`].
     known: usize,
+    /// Slip velocities this small on all three records are not a kink worth a step.
+    floor: f64,
 }
 
 impl KinkPredictor {
-    /// A predictor for `contacts` friction contacts (none: it never cuts).
-    pub(crate) fn new(contacts: usize) -> Self {
+    /// A predictor for `contacts` friction contacts (none: it never cuts)
+    /// that leaves alone contacts whose slip stays within `floor` of zero
+    /// (round-off around a resting contact changes sign at random).
+    pub(crate) fn new(contacts: usize, floor: f64) -> Self {
         Self {
+            floor,
             contacts,
             times: [f64::NAN; 3],
             slips: vec![0.0; 3 * contacts],
@@ -96,7 +103,9 @@ impl KinkPredictor {
             let b = d1 + a * h1;
             // |p - s0| <= (|b| + |a| P) P on [0, P]: most contacts are
             // nowhere near a sign change and stop here.
-            if s0.abs() > (b.abs() + a.abs() * proposed) * proposed {
+            if s0.abs() > (b.abs() + a.abs() * proposed) * proposed
+                || s0.abs().max(s1.abs()).max(s2.abs()) <= self.floor
+            {
                 continue;
             }
             let root = quadratic_roots(a, b, s0)
@@ -133,7 +142,7 @@ mod tests {
     use super::*;
 
     fn predictor_over(times: [f64; 3], slip: impl Fn(f64) -> f64) -> KinkPredictor {
-        let mut predictor = KinkPredictor::new(1);
+        let mut predictor = KinkPredictor::new(1, 0.0);
         for t in times {
             predictor.record(t, |out| out[0] = slip(t));
         }
@@ -178,6 +187,12 @@ mod tests {
         // At the crossing already: taken to be at the start of the step.
         let at = predictor_over([0.0, h, 2.0 * h], |t| 2.0 * h - t + 1e-7 * h);
         assert_eq!(at.next_crossing(h), None);
+        // Round-off around a resting contact, within the floor: no kink.
+        let mut noise = KinkPredictor::new(1, 1e-12);
+        for (t, s) in [(0.0, 3e-13), (h, -2e-13), (2.0 * h, 1e-13)] {
+            noise.record(t, |out| out[0] = s);
+        }
+        assert_eq!(noise.next_crossing(h), None);
         // Two points are not enough; a forgotten history neither.
         let mut short = predictor_over([0.0, h, 2.0 * h], |t| 2.5 * h - t);
         assert!(short.next_crossing(h).is_some());
@@ -189,7 +204,7 @@ mod tests {
     #[test]
     fn the_earliest_contact_sets_the_stop() {
         let h = 1e-4;
-        let mut predictor = KinkPredictor::new(2);
+        let mut predictor = KinkPredictor::new(2, 0.0);
         for t in [0.0, h, 2.0 * h] {
             predictor.record(t, |out| {
                 out[0] = 2.8 * h - t;
