@@ -196,7 +196,9 @@ impl Model {
     }
 
     /// The slip velocity of every friction contact at state x, m/s, in
-    /// contact order: where one changes sign, the bristle law has a kink.
+    /// contact order (`out` has one entry per [`Model::frictions`]; extra
+    /// entries are left as they are): where one changes sign, the bristle
+    /// law has a kink.
     #[inline]
     pub fn slip_velocities(
         &self,

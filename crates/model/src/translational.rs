@@ -207,8 +207,8 @@ impl TranslationalMap {
         out: &mut [f64],
     ) {
         let v = &x[nq..nq + self.nv];
-        for (k, slip) in out.iter_mut().enumerate() {
-            *slip = dot(&self.friction_rows[k * self.nv..(k + 1) * self.nv], v) - platform_velocity;
+        for (slip, row) in out.iter_mut().zip(self.friction_rows.chunks_exact(self.nv)) {
+            *slip = dot(row, v) - platform_velocity;
         }
     }
 

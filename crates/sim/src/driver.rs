@@ -232,7 +232,9 @@ pub(crate) fn step_failure(model: &Model, failure: StepFailure) -> SimError {
 }
 
 /// Integrates through the excitation's segments up to `t_end`: restarts at
-/// each breakpoint, stops with [`SimError::TooManySteps`] once more than
+/// each breakpoint, stops each step on the next predicted kink of the
+/// friction law ([`KinkPredictor`]; slips within `slip_floor` of zero are
+/// round-off), stops with [`SimError::TooManySteps`] once more than
 /// `max_steps` steps (accepted plus rejected) were taken in this call, and
 /// calls `after_step` after every accepted step.
 pub(crate) fn drive<I: Integrating>(

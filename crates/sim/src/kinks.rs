@@ -8,7 +8,8 @@
 //!
 //! Before each step the driver asks [`KinkPredictor::next_crossing`] where
 //! the next sign change falls, from the quadratic through each contact's
-//! slip velocity at the last three accepted step ends, and lets the step
+//! slip velocity at the last three step ends (the start of the segment
+//! counts as one), and lets the step
 //! stop there. A crossing closer than a small fraction of the proposed step
 //! is taken to be at the step's start; one farther than the proposed step
 //! is left to a later step; a slip within a velocity tolerance of zero at
@@ -60,7 +61,7 @@ impl KinkPredictor {
     }
 
     /// Records the slip velocities at `t`, written into the slice by
-    /// `slips`; a time already recorded is not recorded again.
+    /// `slips`; the newest record's time is not recorded again.
     pub(crate) fn record(&mut self, t: f64, slips: impl FnOnce(&mut [f64])) {
         if self.contacts == 0 || (self.known > 0 && self.times[self.newest] == t) {
             return;
@@ -92,10 +93,13 @@ impl KinkPredictor {
         let [t0, t1, t2] = [newest, middle, oldest].map(|slot| self.times[slot]);
         let (h1, h2) = (t0 - t1, t0 - t2);
         let (over_h1, over_gap, over_h2) = (1.0 / h1, 1.0 / (h2 - h1), 1.0 / h2);
-        let window = AT_START * proposed..proposed;
+        // Not before a few units in the last place of t either: a stop that
+        // rounds back to t would be a step of length zero.
+        let window = (AT_START * proposed).max(4.0 * f64::EPSILON * t0.abs())..proposed;
         let mut first: Option<f64> = None;
-        let [s0s, s1s, s2s] = [newest, middle, oldest].map(|slot| self.slips_of(slot));
-        for ((&s0, &s1), &s2) in s0s.iter().zip(s1s).zip(s2s) {
+        let [newest_slips, middle_slips, oldest_slips] =
+            [newest, middle, oldest].map(|slot| self.slips_of(slot));
+        for ((&s0, &s1), &s2) in newest_slips.iter().zip(middle_slips).zip(oldest_slips) {
             // Newton form about the newest point, p(tau) = s0 + d1 tau +
             // d2 tau (tau + h1), that is a tau^2 + b tau + s0.
             let d1 = (s0 - s1) * over_h1;
@@ -118,7 +122,7 @@ impl KinkPredictor {
                 (f, r) => f.or(r),
             };
         }
-        first.map(|tau| t0 + tau)
+        first.map(|tau| t0 + tau).filter(|&stop| stop > t0)
     }
 }
 
@@ -193,6 +197,18 @@ mod tests {
             noise.record(t, |out| out[0] = s);
         }
         assert_eq!(noise.next_crossing(h), None);
+        // Far from t = 0 a crossing closer than the spacing of floats is
+        // not a stop: it would round back to t.
+        let (t0, short) = (1.0e6, 1e-9);
+        let mut tiny = KinkPredictor::new(1, 0.0);
+        for (t, s) in [
+            (t0 - 2.0 * short, 2.0 * short),
+            (t0 - short, short),
+            (t0, 0.0),
+        ] {
+            tiny.record(t, |out| out[0] = s + 1e-12);
+        }
+        assert_eq!(tiny.next_crossing(short), None);
         // Two points are not enough; a forgotten history neither.
         let mut short = predictor_over([0.0, h, 2.0 * h], |t| 2.5 * h - t);
         assert!(short.next_crossing(h).is_some());

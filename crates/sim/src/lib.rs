@@ -17,9 +17,9 @@
 //!   for very stiff isolators; [`RapierEngine`], rapier3d-f64 under the
 //!   model's own force elements, for end stops and loose payloads. The
 //!   adaptive engines and the co-simulation [`Stepper`] share one driver:
-//!   segments between the inputs' discontinuities, steps that end just past
-//!   each predicted sign change of a contact's slip velocity (where the
-//!   bristle law has a kink), the step budget and the failure reporting are
+//!   segments between the inputs' discontinuities, steps that end on each
+//!   predicted sign change of a contact's slip velocity (where the bristle
+//!   law has a kink), the step budget and the failure reporting are
 //!   written once.
 //! - **A whole run**: [`run_scenario`] starts from the scenario's start state
 //!   and returns the trajectory, the selected signals and their statistics.
