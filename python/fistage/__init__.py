@@ -61,7 +61,8 @@ class Study:
     """The result of a sweep or a tolerance analysis: ``columns`` (name to
     numpy array: numbers as float64 with NaN where the program wrote
     nothing, verdicts as bool, or object arrays with None where a verdict is
-    undetermined), ``points`` (one dict per row, as points.json holds
+    undetermined, text columns such as ``refused`` as objects with None
+    where empty), ``points`` (one dict per row, as points.json holds
     them), ``summary`` (summary.json of a tolerance analysis, else None).
     ``study["stable_linear"]`` is a column; ``to_pandas()`` a DataFrame."""
 
@@ -78,7 +79,9 @@ class Study:
             values = [_cell(c) for c in cells]
             for point, value in zip(self.points, values):
                 point[name] = value
-            if any(isinstance(v, bool) for v in values):
+            if any(isinstance(v, str) for v in values):
+                self.columns[name] = numpy.array(values, dtype=object)
+            elif any(isinstance(v, bool) for v in values):
                 dtype = bool if all(isinstance(v, bool) for v in values) else object
                 self.columns[name] = numpy.array(values, dtype=dtype)
             else:
@@ -106,11 +109,16 @@ class Study:
 
 
 def _cell(text):
+    """A cell as the program wrote it: empty is None, a verdict a bool, a
+    number a float, anything else (why a sample was refused) its text."""
     if text == "":
         return None
     if text in ("true", "false"):
         return text == "true"
-    return float(text)
+    try:
+        return float(text)
+    except ValueError:
+        return text
 
 
 def _sweep(self, threads=None, progress=None):

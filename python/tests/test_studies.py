@@ -87,3 +87,17 @@ def test_ctrl_c_stops_a_long_tolerance_analysis(root):
         scenario.robust(samples=65536, threads=1)
     timer.join()
     assert time.monotonic() - start < 2.5
+
+
+def test_study_keeps_a_refused_samples_reason():
+    """A sample whose stage could not be built carries its reason as text;
+    the table around it still reads as numbers and verdicts."""
+    table = ("sample,overrides.bearing_friction.f_s,stable_linear,max_real_eig,refused\n"
+             "0,1.2e0,true,-3.5e0,\n"
+             "1,4e-1,,,f_s must be >= f_c\n")
+    study = fistage.Study(table)
+    assert study["overrides.bearing_friction.f_s"].dtype == numpy.float64
+    assert list(study["refused"]) == [None, "f_s must be >= f_c"]
+    assert study.points[1]["refused"] == "f_s must be >= f_c"
+    assert study.points[0]["stable_linear"] is True and study.points[1]["stable_linear"] is None
+    assert numpy.isnan(study["max_real_eig"][1]) and study["max_real_eig"][0] == -3.5
