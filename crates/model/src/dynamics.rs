@@ -64,6 +64,7 @@ pub struct Workspace<S: Scalar = f64> {
     tau: DVector<S>,
     block_mass: Vec<Vec<S>>,
     block_rhs: Vec<Vec<S>>,
+    pub(crate) generalized: Vec<S>,
     /// Scratch space of the rooted fast path ([`crate::rooted`]).
     pub(crate) rooted: crate::rooted::RootedScratch<S>,
     /// How the bristle states enter the evaluation (explicit unless an
@@ -120,6 +121,7 @@ impl Structure {
                 .iter()
                 .map(|b| vec![S::zero(); b.dofs.len()])
                 .collect(),
+            generalized: vec![S::zero(); nv],
             rooted,
             bristles: crate::bristle::BristleStage::explicit(nf),
             elements: ElementValues {

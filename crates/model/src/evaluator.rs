@@ -93,7 +93,9 @@ impl Evaluator {
         ws: &mut Workspace<S>,
     ) {
         match self {
-            Self::ConstantJacobian(map) => map.rhs(model, x, inputs, dx, &mut ws.bristles),
+            Self::ConstantJacobian(map) => {
+                map.rhs(model, x, inputs, dx, &mut ws.generalized, &mut ws.bristles)
+            }
             Self::RootedBodies(plan) => plan.rhs(
                 model,
                 x,

@@ -3,10 +3,9 @@
 //! velocities, isolator deflections, sensor readings and actuator directions are
 //! constant Jacobian rows, gravity is a constant generalized force, and the mass
 //! matrix is constant. The rows are taken from the general kinematics of
-//! [`crate::dynamics`] at build time, and the linear part of the motion (gravity
-//! and the bushings through `M^-1`) is folded into one affine map of the state;
-//! the element laws (LuGre, bushing, servo) are the same functions both paths
-//! call. A test checks that both paths give the same state derivative.
+//! [`crate::dynamics`] at build time; the element laws (LuGre, bushing, servo)
+//! are the same functions both paths call. A test checks that both paths give
+//! the same state derivative.
 
 use crate::bristle::BristleStage;
 use crate::elements::{Inputs, Structure};
@@ -17,30 +16,22 @@ use crate::scalar::Scalar;
 use crate::values::InputValues;
 
 /// Constant Jacobian rows of a translational model (row-major, `nv` per row).
-///
-/// The bushings are linear in their deflection and rate, and gravity and the
-/// mass matrix are constant, so everything but the friction and the servo is
-/// one affine map of the state: `M^-1 (g + J^T f_bushing(J q + d, J v))` is
-/// kept as a constant part and one matrix over the positions and one over the
-/// velocities, read off [`bushing_force`] at build time.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct TranslationalMap {
     nv: usize,
-    /// `M^-1` times gravity and the bushings' forces at zero coordinates.
-    constant_accelerations: Vec<f64>,
-    /// Accelerations per unit joint coordinate through the bushings (row `i`:
-    /// acceleration of coordinate `i`).
-    position_accelerations: Vec<f64>,
-    /// Accelerations per unit joint rate through the bushings.
-    velocity_accelerations: Vec<f64>,
+    mass_inverse: Vec<f64>,
+    gravity: Vec<f64>,
     friction_rows: Vec<f64>,
     /// `M^-1 J_k^T` for each friction row `J_k` (row-major, `nv` per contact):
     /// the accelerations a unit friction force causes.
     friction_accelerations: Vec<f64>,
+    /// Translational bushing axes with stiffness or damping: (stiffness, damping,
+    /// deflection offset, row start in `isolator_rows`).
+    isolator_axes: Vec<(f64, f64, f64, usize)>,
+    isolator_rows: Vec<f64>,
     sensor_rows: Vec<f64>,
     sensor_offsets: Vec<f64>,
-    /// `M^-1 J_a^T` for each actuator direction `J_a`.
-    actuator_accelerations: Vec<f64>,
+    actuator_rows: Vec<f64>,
     /// The same rows as non-zero entries, for models beyond the dense sizes.
     sparse: Option<Box<Tables<SparseRows>>>,
 }
@@ -48,142 +39,104 @@ pub(crate) struct TranslationalMap {
 /// The map's row tables, dense or sparse.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Tables<R> {
-    position_accelerations: R,
-    velocity_accelerations: R,
+    mass_inverse: R,
     friction_rows: R,
     friction_accelerations: R,
+    isolator_rows: R,
     sensor_rows: R,
-    actuator_accelerations: R,
+    actuator_rows: R,
 }
 
 /// Degrees of freedom up to which the rows stay dense with a compile-time
 /// length; beyond, they are kept sparse.
 const DENSE_UP_TO: usize = 8;
 
-/// Row-major `nv`-column rows read off the general kinematics.
-struct KinematicRows {
-    friction: Vec<f64>,
-    isolator: Vec<f64>,
-    sensor: Vec<f64>,
-    actuator: Vec<f64>,
-    gravity: Vec<f64>,
-}
-
-impl KinematicRows {
-    /// Velocities are linear in the joint rates, so unit joint rates give the
-    /// Jacobian columns.
-    fn read(model: &Structure, ws: &mut crate::dynamics::Workspace) -> Self {
-        let (nv, nq) = (model.layout.nv, model.layout.nq);
+impl TranslationalMap {
+    /// Reads the rows off the general kinematics: velocities are linear in the
+    /// joint rates, so unit joint rates give the Jacobian columns.
+    pub(crate) fn build(model: &Structure, mass_inverse: &nalgebra::DMatrix<f64>) -> Self {
+        let nv = model.layout.nv;
+        let nq = model.layout.nq;
+        let mut ws = model.workspace_with(RootedScratch::empty());
         let zero = model.zero_state();
         let inputs = Inputs::default();
-        let mut rows = Self {
-            friction: vec![0.0; model.frictions.len() * nv],
-            isolator: vec![0.0; 3 * model.isolators.len() * nv],
-            sensor: vec![0.0; model.sensors.len() * nv],
-            actuator: vec![0.0; model.actuators.len() * nv],
+        let (nf, ni, ns, na) = (
+            model.frictions.len(),
+            model.isolators.len(),
+            model.sensors.len(),
+            model.actuators.len(),
+        );
+        let mut map = Self {
+            nv,
+            mass_inverse: (0..nv * nv)
+                .map(|k| mass_inverse[(k / nv, k % nv)])
+                .collect(),
             gravity: vec![0.0; nv],
+            friction_rows: vec![0.0; nf * nv],
+            friction_accelerations: vec![0.0; nf * nv],
+            isolator_axes: Vec::new(),
+            isolator_rows: vec![0.0; 3 * ni * nv],
+            sensor_rows: vec![0.0; ns * nv],
+            sensor_offsets: Vec::new(),
+            actuator_rows: vec![0.0; na * nv],
+            sparse: None,
         };
+        model.evaluate(&zero, &inputs, &mut ws);
+        for (k, isolator) in model.isolators.iter().enumerate() {
+            for axis in 0..3 {
+                let (stiffness, damping) = (isolator.stiffness[axis], isolator.damping[axis]);
+                if stiffness != 0.0 || damping != 0.0 {
+                    let offset = ws.elements.isolator_deflection[k][axis];
+                    map.isolator_axes
+                        .push((stiffness, damping, offset, 3 * k + axis));
+                }
+            }
+        }
+        map.sensor_offsets = ws.elements.sensor_position.clone();
         for j in 0..nv {
             let mut x = zero.clone();
             x[nq + j] = 1.0;
-            model.evaluate(&x, &inputs, ws);
-            for (k, slip) in ws.elements.slip_velocity.iter().enumerate() {
-                rows.friction[k * nv + j] = *slip;
+            model.evaluate(&x, &inputs, &mut ws);
+            for k in 0..nf {
+                map.friction_rows[k * nv + j] = ws.elements.slip_velocity[k];
             }
-            for (k, rate) in ws.elements.isolator_rate.iter().enumerate() {
-                for (axis, r) in rate.iter().take(3).enumerate() {
-                    rows.isolator[(3 * k + axis) * nv + j] = *r;
+            for k in 0..ni {
+                for axis in 0..3 {
+                    map.isolator_rows[(3 * k + axis) * nv + j] = ws.elements.isolator_rate[k][axis];
                 }
             }
-            for (k, v) in ws.elements.sensor_velocity.iter().enumerate() {
-                rows.sensor[k * nv + j] = *v;
+            for k in 0..ns {
+                map.sensor_rows[k * nv + j] = ws.elements.sensor_velocity[k];
             }
             for (k, actuator) in model.actuators.iter().enumerate() {
-                rows.actuator[k * nv + j] = ws
+                map.actuator_rows[k * nv + j] = ws
                     .point_velocity(actuator.body, &actuator.point)
                     .dot(&actuator.axis);
             }
-            rows.gravity[j] = model
+            map.gravity[j] = model
                 .bodies
                 .iter()
                 .enumerate()
                 .map(|(b, body)| body.mass * ws.point_velocity(b, &body.com).dot(&model.gravity))
                 .sum();
         }
-        rows
-    }
-}
-
-/// `M^-1 J^T` for each row `J` of a row-major table.
-fn accelerations_of(mass_inverse: &[f64], rows: &[f64], nv: usize) -> Vec<f64> {
-    rows.chunks_exact(nv.max(1))
-        .flat_map(|row| (0..nv).map(move |i| dot(&mass_inverse[i * nv..(i + 1) * nv], row)))
-        .collect()
-}
-
-impl TranslationalMap {
-    /// Reads the rows off the general kinematics and folds the bushings,
-    /// gravity and the mass matrix into the affine part.
-    pub(crate) fn build(model: &Structure, mass_inverse: &nalgebra::DMatrix<f64>) -> Self {
-        let nv = model.layout.nv;
-        let mut ws = model.workspace_with(RootedScratch::empty());
-        model.evaluate(&model.zero_state(), &Inputs::default(), &mut ws);
-        let offsets = ws.elements.isolator_deflection.clone();
-        let sensor_offsets = ws.elements.sensor_position.clone();
-        let rows = KinematicRows::read(model, &mut ws);
-        let m_inv: Vec<f64> = (0..nv * nv)
-            .map(|k| mass_inverse[(k / nv, k % nv)])
-            .collect();
-        // Generalized bushing force: J^T f(J q + d, J v), linear in q and v.
-        let (mut force, mut stiffness, mut damping) =
-            (rows.gravity.clone(), vec![0.0; nv * nv], vec![0.0; nv * nv]);
-        for (k, (isolator, offset)) in model.isolators.iter().zip(&offsets).enumerate() {
-            for (axis, &offset) in offset.iter().take(3).enumerate() {
-                let (k_axis, c_axis) = (isolator.stiffness[axis], isolator.damping[axis]);
-                let row = &rows.isolator[(3 * k + axis) * nv..(3 * k + axis + 1) * nv];
-                let at_zero = bushing_force(k_axis, c_axis, offset, 0.0);
-                let per_deflection = bushing_force(k_axis, c_axis, 1.0, 0.0);
-                let per_rate = bushing_force(k_axis, c_axis, 0.0, 1.0);
-                for i in 0..nv {
-                    force[i] += row[i] * at_zero;
-                    for j in 0..nv {
-                        stiffness[i * nv + j] += row[i] * per_deflection * row[j];
-                        damping[i * nv + j] += row[i] * per_rate * row[j];
-                    }
-                }
+        for k in 0..nf {
+            for i in 0..nv {
+                map.friction_accelerations[k * nv + i] = dot(
+                    &map.mass_inverse[i * nv..(i + 1) * nv],
+                    &map.friction_rows[k * nv..(k + 1) * nv],
+                );
             }
         }
-        let times_m_inv = |table: &[f64]| -> Vec<f64> {
-            (0..nv * nv)
-                .map(|k| {
-                    let (i, j) = (k / nv, k % nv);
-                    (0..nv).map(|l| m_inv[i * nv + l] * table[l * nv + j]).sum()
-                })
-                .collect()
-        };
-        let mut map = Self {
-            nv,
-            constant_accelerations: (0..nv)
-                .map(|i| dot(&m_inv[i * nv..(i + 1) * nv], &force))
-                .collect(),
-            position_accelerations: times_m_inv(&stiffness),
-            velocity_accelerations: times_m_inv(&damping),
-            friction_accelerations: accelerations_of(&m_inv, &rows.friction, nv),
-            actuator_accelerations: accelerations_of(&m_inv, &rows.actuator, nv),
-            friction_rows: rows.friction,
-            sensor_rows: rows.sensor,
-            sensor_offsets,
-            sparse: None,
-        };
         if nv > DENSE_UP_TO {
             let sparse = |table: &[f64]| SparseRows::from_dense(table, nv);
             map.sparse = Some(Box::new(Tables {
-                position_accelerations: sparse(&map.position_accelerations),
-                velocity_accelerations: sparse(&map.velocity_accelerations),
+                mass_inverse: sparse(&map.mass_inverse),
                 friction_rows: sparse(&map.friction_rows),
                 friction_accelerations: sparse(&map.friction_accelerations),
+                isolator_rows: sparse(&map.isolator_rows),
                 sensor_rows: sparse(&map.sensor_rows),
-                actuator_accelerations: sparse(&map.actuator_accelerations),
+                actuator_rows: sparse(&map.actuator_rows),
             }));
         }
         map
@@ -195,16 +148,17 @@ impl TranslationalMap {
         let nv = self.nv;
         let rows = |table| DenseRows::<N> { table, nv };
         Tables {
-            position_accelerations: rows(&self.position_accelerations),
-            velocity_accelerations: rows(&self.velocity_accelerations),
+            mass_inverse: rows(&self.mass_inverse),
             friction_rows: rows(&self.friction_rows),
             friction_accelerations: rows(&self.friction_accelerations),
+            isolator_rows: rows(&self.isolator_rows),
             sensor_rows: rows(&self.sensor_rows),
-            actuator_accelerations: rows(&self.actuator_accelerations),
+            actuator_rows: rows(&self.actuator_rows),
         }
     }
 
-    /// The state derivative. Models with up to [`DENSE_UP_TO`] degrees of
+    /// The state derivative; `ws` only supplies scratch space for the
+    /// generalized forces. Models with up to [`DENSE_UP_TO`] degrees of
     /// freedom take dense rows whose length is a compile-time constant (fully
     /// unrolled products), larger ones their rows' non-zero entries; the
     /// arithmetic is the same but for the products with zero.
@@ -214,18 +168,19 @@ impl TranslationalMap {
         x: &[S],
         inputs: &InputValues<S>,
         dx: &mut [S],
+        generalized: &mut [S],
         bristles: &mut BristleStage<S>,
     ) {
-        let out = (dx, bristles);
+        let out = (dx, generalized, bristles);
         match (&self.sparse, self.nv) {
             (Some(sparse), _) => {
                 let tables = Tables {
-                    position_accelerations: &sparse.position_accelerations,
-                    velocity_accelerations: &sparse.velocity_accelerations,
+                    mass_inverse: &sparse.mass_inverse,
                     friction_rows: &sparse.friction_rows,
                     friction_accelerations: &sparse.friction_accelerations,
+                    isolator_rows: &sparse.isolator_rows,
                     sensor_rows: &sparse.sensor_rows,
-                    actuator_accelerations: &sparse.actuator_accelerations,
+                    actuator_rows: &sparse.actuator_rows,
                 };
                 self.rhs_with(&tables, model, x, inputs, out)
             }
@@ -265,17 +220,22 @@ impl TranslationalMap {
         model: &Structure,
         x: &[S],
         inputs: &InputValues<S>,
-        (dx, bristles): (&mut [S], &mut BristleStage<S>),
+        (dx, generalized, bristles): (&mut [S], &mut [S], &mut BristleStage<S>),
     ) {
-        let nv = tables.position_accelerations.columns();
+        let nv = tables.mass_inverse.columns();
         let nq = model.layout.nq;
         let (q, v) = (&x[..nq], &x[nq..nq + nv]);
         let (q, v) = (&q[..nv], &v[..nv]);
         dx[..nq].copy_from_slice(v);
-        for i in 0..nv {
-            dx[nq + i] = S::constant(self.constant_accelerations[i])
-                + tables.position_accelerations.dot(i, q)
-                + tables.velocity_accelerations.dot(i, v);
+        let force = &mut generalized[..nv];
+        for (f, g) in force.iter_mut().zip(&self.gravity[..nv]) {
+            *f = S::constant(*g);
+        }
+        for &(stiffness, damping, offset, row) in &self.isolator_axes {
+            let rows = &tables.isolator_rows;
+            let deflection = S::constant(offset) + rows.dot(row, q);
+            let f = bushing_force(stiffness, damping, deflection, rows.dot(row, v));
+            rows.axpy(row, f, force);
         }
         let command = match &model.controller {
             Some(controller) => {
@@ -293,11 +253,12 @@ impl TranslationalMap {
             None => S::zero(),
         };
         if let Some(a) = model.servo_actuator() {
-            tables.actuator_accelerations.axpy(
-                a,
-                command + inputs.servo_force,
-                &mut dx[nq..nq + nv],
-            );
+            tables
+                .actuator_rows
+                .axpy(a, command + inputs.servo_force, force);
+        }
+        for i in 0..nv {
+            dx[nq + i] = tables.mass_inverse.dot(i, force);
         }
         // Friction last, straight into the accelerations through the
         // precomputed columns of M^-1 J^T: it waits on an exponential, so
