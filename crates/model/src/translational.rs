@@ -11,7 +11,7 @@ use crate::bristle::BristleStage;
 use crate::elements::{Inputs, Structure};
 use crate::laws::bushing_force;
 use crate::rooted::RootedScratch;
-use crate::rows::{DYNAMIC, DenseRows, RowTable, SparseRows, dot};
+use crate::rows::{DYNAMIC, DenseRows, PackedRows, RowTable, SparseRows, dot, most_nonzeros};
 use crate::scalar::Scalar;
 use crate::values::InputValues;
 
@@ -32,8 +32,24 @@ pub(crate) struct TranslationalMap {
     sensor_rows: Vec<f64>,
     sensor_offsets: Vec<f64>,
     actuator_rows: Vec<f64>,
-    /// The same rows as non-zero entries, for models beyond the dense sizes.
-    sparse: Option<Box<Tables<SparseRows>>>,
+    /// The same rows as non-zero entries, where that is cheaper than dense.
+    sparse: SparseTables,
+}
+
+/// The rows' non-zero entries, when the model's rows are kept that way.
+#[derive(Debug, Clone, PartialEq)]
+enum SparseTables {
+    /// Dense rows only.
+    None,
+    /// At most two non-zero entries in every row (a rail stage: a contact
+    /// touches one body, an isolator joins two, the mass matrix is diagonal).
+    Two(Box<Tables<PackedRows<2>>>),
+    /// At most three.
+    Three(Box<Tables<PackedRows<3>>>),
+    /// At most four.
+    Four(Box<Tables<PackedRows<4>>>),
+    /// Each row's own count, beyond the dense sizes.
+    Compressed(Box<Tables<SparseRows>>),
 }
 
 /// The map's row tables, dense or sparse.
@@ -47,9 +63,71 @@ struct Tables<R> {
     actuator_rows: R,
 }
 
+impl<R> Tables<R> {
+    /// The same tables, borrowed (the form the row operations take).
+    fn by_ref(&self) -> Tables<&R> {
+        Tables {
+            mass_inverse: &self.mass_inverse,
+            friction_rows: &self.friction_rows,
+            friction_accelerations: &self.friction_accelerations,
+            isolator_rows: &self.isolator_rows,
+            sensor_rows: &self.sensor_rows,
+            actuator_rows: &self.actuator_rows,
+        }
+    }
+}
+
 /// Degrees of freedom up to which the rows stay dense with a compile-time
-/// length; beyond, they are kept sparse.
+/// length unless a fixed count of entries per row is cheaper; beyond, they
+/// are kept sparse.
 const DENSE_UP_TO: usize = 8;
+
+impl<R> Tables<R> {
+    /// Each of `map`'s tables through `convert`, or `None` when one refuses.
+    fn of(map: &TranslationalMap, convert: impl Fn(&[f64]) -> Option<R>) -> Option<Box<Self>> {
+        Some(Box::new(Tables {
+            mass_inverse: convert(&map.mass_inverse)?,
+            friction_rows: convert(&map.friction_rows)?,
+            friction_accelerations: convert(&map.friction_accelerations)?,
+            isolator_rows: convert(&map.isolator_rows)?,
+            sensor_rows: convert(&map.sensor_rows)?,
+            actuator_rows: convert(&map.actuator_rows)?,
+        }))
+    }
+}
+
+impl SparseTables {
+    /// The cheapest form of `map`'s rows: a fixed count of entries per row
+    /// when every row has at most four non-zeros and that is fewer than the
+    /// degrees of freedom, dense rows up to [`DENSE_UP_TO`] degrees of
+    /// freedom, each row's own entries beyond.
+    fn choose(map: &TranslationalMap) -> Self {
+        let nv = map.nv;
+        let tables = [
+            &map.mass_inverse[..],
+            &map.friction_rows,
+            &map.friction_accelerations,
+            &map.isolator_rows,
+            &map.sensor_rows,
+            &map.actuator_rows,
+        ];
+        let most = most_nonzeros(&tables, nv);
+        let packed = (most < nv)
+            .then(|| match most {
+                0..=2 => Tables::of(map, |t| PackedRows::from_dense(t, nv)).map(Self::Two),
+                3 => Tables::of(map, |t| PackedRows::from_dense(t, nv)).map(Self::Three),
+                4 => Tables::of(map, |t| PackedRows::from_dense(t, nv)).map(Self::Four),
+                _ => None,
+            })
+            .flatten();
+        match packed {
+            Some(packed) => packed,
+            None if nv > DENSE_UP_TO => Tables::of(map, |t| Some(SparseRows::from_dense(t, nv)))
+                .map_or(Self::None, Self::Compressed),
+            None => Self::None,
+        }
+    }
+}
 
 impl TranslationalMap {
     /// Reads the rows off the general kinematics: velocities are linear in the
@@ -79,7 +157,7 @@ impl TranslationalMap {
             sensor_rows: vec![0.0; ns * nv],
             sensor_offsets: Vec::new(),
             actuator_rows: vec![0.0; na * nv],
-            sparse: None,
+            sparse: SparseTables::None,
         };
         model.evaluate(&zero, &inputs, &mut ws);
         for (k, isolator) in model.isolators.iter().enumerate() {
@@ -128,17 +206,7 @@ impl TranslationalMap {
                 );
             }
         }
-        if nv > DENSE_UP_TO {
-            let sparse = |table: &[f64]| SparseRows::from_dense(table, nv);
-            map.sparse = Some(Box::new(Tables {
-                mass_inverse: sparse(&map.mass_inverse),
-                friction_rows: sparse(&map.friction_rows),
-                friction_accelerations: sparse(&map.friction_accelerations),
-                isolator_rows: sparse(&map.isolator_rows),
-                sensor_rows: sparse(&map.sensor_rows),
-                actuator_rows: sparse(&map.actuator_rows),
-            }));
-        }
+        map.sparse = SparseTables::choose(&map);
         map
     }
 
@@ -158,10 +226,11 @@ impl TranslationalMap {
     }
 
     /// The state derivative; `ws` only supplies scratch space for the
-    /// generalized forces. Models with up to [`DENSE_UP_TO`] degrees of
-    /// freedom take dense rows whose length is a compile-time constant (fully
-    /// unrolled products), larger ones their rows' non-zero entries; the
-    /// arithmetic is the same but for the products with zero.
+    /// generalized forces. The rows are those [`SparseTables::choose`]
+    /// picked: a fixed count of non-zero entries per row, dense rows whose
+    /// length is a compile-time constant (fully unrolled products), or each
+    /// row's own non-zero entries; the sums are the same but for the products
+    /// with zero.
     pub(crate) fn rhs<S: Scalar>(
         &self,
         model: &Structure,
@@ -173,26 +242,21 @@ impl TranslationalMap {
     ) {
         let out = (dx, generalized, bristles);
         match (&self.sparse, self.nv) {
-            (Some(sparse), _) => {
-                let tables = Tables {
-                    mass_inverse: &sparse.mass_inverse,
-                    friction_rows: &sparse.friction_rows,
-                    friction_accelerations: &sparse.friction_accelerations,
-                    isolator_rows: &sparse.isolator_rows,
-                    sensor_rows: &sparse.sensor_rows,
-                    actuator_rows: &sparse.actuator_rows,
-                };
-                self.rhs_with(&tables, model, x, inputs, out)
+            (SparseTables::Two(t), _) => self.rhs_with(&t.by_ref(), model, x, inputs, out),
+            (SparseTables::Three(t), _) => self.rhs_with(&t.by_ref(), model, x, inputs, out),
+            (SparseTables::Four(t), _) => self.rhs_with(&t.by_ref(), model, x, inputs, out),
+            (SparseTables::Compressed(t), _) => self.rhs_with(&t.by_ref(), model, x, inputs, out),
+            (SparseTables::None, 1) => self.rhs_with(&self.dense::<1>(), model, x, inputs, out),
+            (SparseTables::None, 2) => self.rhs_with(&self.dense::<2>(), model, x, inputs, out),
+            (SparseTables::None, 3) => self.rhs_with(&self.dense::<3>(), model, x, inputs, out),
+            (SparseTables::None, 4) => self.rhs_with(&self.dense::<4>(), model, x, inputs, out),
+            (SparseTables::None, 5) => self.rhs_with(&self.dense::<5>(), model, x, inputs, out),
+            (SparseTables::None, 6) => self.rhs_with(&self.dense::<6>(), model, x, inputs, out),
+            (SparseTables::None, 7) => self.rhs_with(&self.dense::<7>(), model, x, inputs, out),
+            (SparseTables::None, 8) => self.rhs_with(&self.dense::<8>(), model, x, inputs, out),
+            (SparseTables::None, _) => {
+                self.rhs_with(&self.dense::<DYNAMIC>(), model, x, inputs, out)
             }
-            (None, 1) => self.rhs_with(&self.dense::<1>(), model, x, inputs, out),
-            (None, 2) => self.rhs_with(&self.dense::<2>(), model, x, inputs, out),
-            (None, 3) => self.rhs_with(&self.dense::<3>(), model, x, inputs, out),
-            (None, 4) => self.rhs_with(&self.dense::<4>(), model, x, inputs, out),
-            (None, 5) => self.rhs_with(&self.dense::<5>(), model, x, inputs, out),
-            (None, 6) => self.rhs_with(&self.dense::<6>(), model, x, inputs, out),
-            (None, 7) => self.rhs_with(&self.dense::<7>(), model, x, inputs, out),
-            (None, 8) => self.rhs_with(&self.dense::<8>(), model, x, inputs, out),
-            (None, _) => self.rhs_with(&self.dense::<DYNAMIC>(), model, x, inputs, out),
         }
     }
 
