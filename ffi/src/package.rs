@@ -7,8 +7,10 @@
 //!
 //! Entries are deflate-compressed with a fixed time stamp (archives do not
 //! depend on when they were built), and the library is packaged without its
-//! debug information: the system's `strip --strip-debug` (binutils, which
-//! the Rust toolchain's linker brings) writes a copy; the code is untouched.
+//! debug information and static symbol table: the system's `strip
+//! --strip-all` (binutils, which the Rust toolchain's linker brings) writes a
+//! copy that keeps the code and the dynamic symbols importers resolve the FMI
+//! functions by.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -242,10 +244,11 @@ fn deflated_archive(entries: &[(String, &[u8])]) -> Result<Vec<u8>, PackageError
     Ok(cursor.into_inner())
 }
 
-/// The library's bytes without debug sections. It must be an ELF shared
-/// object exporting the FMI functions; `strip --strip-debug` writes the
-/// copy, and a library with no debug sections (or a system without `strip`)
-/// is packaged as it is.
+/// The library's bytes without debug sections and static symbols. It must
+/// be an ELF shared object exporting the FMI functions, before and after;
+/// `strip --strip-all` writes the copy (a shared object keeps its dynamic
+/// symbols), and on a system without `strip` the library is packaged as it
+/// is.
 fn library_without_debug_info(library: &Path, scratch: &Path) -> Result<Vec<u8>, PackageError> {
     let bytes = read(library)?;
     check_fmi_library(&bytes).map_err(|reason| PackageError::Library {
@@ -254,23 +257,30 @@ fn library_without_debug_info(library: &Path, scratch: &Path) -> Result<Vec<u8>,
     })?;
     let stripped = scratch.join("library.so");
     let status = Command::new("strip")
-        .arg("--strip-debug")
+        .arg("--strip-all")
         .arg("-o")
         .arg(&stripped)
         .arg(library)
         .status();
     match status {
-        Ok(status) if status.success() => read(&stripped),
+        Ok(status) if status.success() => {
+            let stripped_bytes = read(&stripped)?;
+            check_fmi_library(&stripped_bytes).map_err(|reason| PackageError::Library {
+                file: library.to_path_buf(),
+                reason: format!("after strip --strip-all: {reason}"),
+            })?;
+            Ok(stripped_bytes)
+        }
         // No `strip` on this system: the library goes in as it is.
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(bytes),
         // A `strip` that fails must not silently ship the debug information.
         Ok(status) => Err(PackageError::Library {
             file: library.to_path_buf(),
-            reason: format!("strip --strip-debug failed ({status})"),
+            reason: format!("strip --strip-all failed ({status})"),
         }),
         Err(e) => Err(PackageError::Library {
             file: library.to_path_buf(),
-            reason: format!("strip --strip-debug could not run: {e}"),
+            reason: format!("strip --strip-all could not run: {e}"),
         }),
     }
 }

@@ -1,11 +1,13 @@
 //! `fistage check SCENARIO`: load and validate a scenario and its robot
 //! without simulating (everything `fistage run` checks before it integrates:
 //! signal names, colliders, the start state), and print what was assembled: bodies, joints, elements, the
-//! evaluation path, the integration method the default engine chose and why,
+//! evaluation path, whether it runs as machine code, the integration method
+//! the default engine chose and why,
 //! the state layout and the output signals.
 
 use std::path::PathBuf;
 
+use fistage_model::native::{Function, NotCompiled};
 use fistage_model::{EvaluationPath, Frame, JointMotion, Model};
 
 /// Arguments of `fistage check`.
@@ -29,6 +31,7 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     print_bodies(model);
     print_elements(model);
     println!("evaluation: {}", evaluation_path(model.evaluation_path()));
+    print_native(model);
     print_method(&loaded)?;
     println!("states ({}):", model.n_states());
     for ((name, kind), nominal) in model
@@ -63,6 +66,26 @@ fn print_method(loaded: &fistage_model::Loaded) -> anyhow::Result<()> {
         choice.reason
     );
     Ok(())
+}
+
+/// Whether the right-hand side and the implicit bristle stage run as
+/// machine code, and their size, or why not.
+fn print_native(model: &Model) {
+    for (function, name) in [
+        (Function::Rhs, "right-hand side"),
+        (Function::ImplicitStage, "implicit bristle stage"),
+    ] {
+        match model.native(function) {
+            Ok(native) => println!(
+                "{name}: machine code, {} operations, {} guarded branches, compiled in {:.1} ms",
+                native.operations(),
+                native.guards(),
+                native.compile_time().as_secs_f64() * 1e3
+            ),
+            Err(NotCompiled::NoBristles) => {}
+            Err(why) => println!("{name}: evaluated generically ({why})"),
+        }
+    }
 }
 
 fn evaluation_path(path: EvaluationPath) -> &'static str {

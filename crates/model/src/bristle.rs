@@ -17,8 +17,9 @@ use crate::servo::FrictionModel;
 /// The bristle treatment of one evaluation, kept in the workspace.
 #[derive(Debug, Clone)]
 pub struct BristleStage<S: Scalar = f64> {
-    /// The implicit coefficient of the stage times the step, s; 0: explicit.
-    step: f64,
+    /// The implicit coefficient of the stage times the step, s (`None`:
+    /// explicit).
+    step: Option<S>,
     /// The solved bristle state of each contact (implicit stages only).
     solved: Vec<S>,
     /// The solved state of a compensator's LuGre model (implicit stages only).
@@ -29,7 +30,7 @@ impl<S: Scalar> BristleStage<S> {
     /// Explicit treatment for `contacts` contacts.
     pub(crate) fn explicit(contacts: usize) -> Self {
         Self {
-            step: 0.0,
+            step: None,
             solved: vec![S::zero(); contacts],
             compensator: S::zero(),
         }
@@ -39,16 +40,14 @@ impl<S: Scalar> BristleStage<S> {
     /// `slip`, where `z` is the state's bristle entry.
     #[inline(always)]
     pub(crate) fn law(&mut self, k: usize, contact: &FrictionContact, slip: S, z: S) -> (S, S) {
-        if self.step == 0.0 {
-            contact.lugre.force_and_z_rate_of(slip, z)
-        } else {
-            let (force, rate, solved) = crate::LugreOf::constant(&contact.lugre).implicit_stage(
-                slip,
-                z,
-                S::constant(self.step),
-            );
-            self.solved[k] = solved;
-            (force, rate)
+        match self.step {
+            None => contact.lugre.force_and_z_rate_of(slip, z),
+            Some(step) => {
+                let (force, rate, solved) =
+                    crate::LugreOf::constant(&contact.lugre).implicit_stage(slip, z, step);
+                self.solved[k] = solved;
+                (force, rate)
+            }
         }
     }
 
@@ -57,10 +56,9 @@ impl<S: Scalar> BristleStage<S> {
     /// for a LuGre model at an implicit stage).
     #[inline]
     pub(crate) fn compensator_law(&mut self, model: &FrictionModel, v: S, w: S) -> (S, S) {
-        match model {
-            FrictionModel::Lugre(p) if self.step != 0.0 => {
-                let (force, rate, solved) =
-                    crate::LugreOf::constant(p).implicit_stage(v, w, S::constant(self.step));
+        match (model, self.step) {
+            (FrictionModel::Lugre(p), Some(step)) => {
+                let (force, rate, solved) = crate::LugreOf::constant(p).implicit_stage(v, w, step);
                 self.compensator = solved;
                 (force, rate)
             }
@@ -68,8 +66,8 @@ impl<S: Scalar> BristleStage<S> {
         }
     }
 
-    /// Sets the stage's implicit step (0: explicit).
-    pub(crate) fn set_step(&mut self, step: f64) {
+    /// Sets the stage's implicit step (`None`: explicit).
+    pub(crate) fn set_step(&mut self, step: Option<S>) {
         self.step = step;
     }
 

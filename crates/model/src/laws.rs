@@ -10,6 +10,8 @@
 //! - [`rotation_log`], [`quaternion_rotation`], [`quaternion_rate`],
 //!   [`newton_euler`]: rotations and the free rigid body.
 
+use std::cmp::Ordering::{Greater, Less};
+
 use nalgebra::{Matrix3, Vector3};
 
 use crate::bristle::BristleStage;
@@ -250,7 +252,7 @@ pub(crate) fn rotation_log<S: Scalar>(r: &Matrix3<S>) -> Vector3<S> {
     ) * half;
     let sin_squared = skew.norm_squared();
     let cos = (r.trace() - S::one()) * half;
-    if sin_squared.value() < 1e-4 && cos.value() > 0.0 {
+    if sin_squared.compare_value(1e-4) == Some(Less) && cos.compare_value(0.0) == Some(Greater) {
         // Below about 0.01 rad (every bushing deflection in practice):
         // angle / sin(angle) = asin(s) / s = 1 + s^2/6 + 3 s^4/40 + 5 s^6/112
         // + O(s^8), the first omitted term under 3e-18. No square root (which
@@ -259,7 +261,7 @@ pub(crate) fn rotation_log<S: Scalar>(r: &Matrix3<S>) -> Vector3<S> {
             + sin_squared * (S::constant(3.0 / 40.0) + sin_squared * S::constant(5.0 / 112.0));
         return skew * (S::one() + sin_squared * series);
     }
-    if cos.value() > -0.99 {
+    if cos.compare_value(-0.99) == Some(Greater) {
         let sin = sin_squared.sqrt();
         return skew * (sin.atan2(cos) / sin);
     }
@@ -284,7 +286,7 @@ pub(crate) fn rotation_log<S: Scalar>(r: &Matrix3<S>) -> Vector3<S> {
             outer(pivot, j) / (scale * pivot_component)
         }
     });
-    if axis.dot(&skew).value() < 0.0 {
+    if axis.dot(&skew).compare_value(0.0) == Some(Less) {
         axis = -axis;
     }
     axis * sin_squared.sqrt().atan2(cos)

@@ -75,6 +75,7 @@ mod laws;
 pub mod linearize;
 pub mod lugre;
 pub mod model;
+pub mod native;
 pub mod parameter;
 pub mod reference;
 pub mod robot;

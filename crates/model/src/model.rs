@@ -4,6 +4,8 @@
 //! user does with a model (simulate, linearise, find equilibria, read
 //! outputs) starts here; the evaluation paths below it see only the structure.
 
+use std::sync::{Arc, OnceLock};
+
 use nalgebra::{Matrix3, Vector3};
 
 use crate::dynamics::{EvaluationPath, InputValues, Workspace};
@@ -12,6 +14,7 @@ use crate::elements::{
     Structure,
 };
 use crate::evaluator::Evaluator;
+use crate::native::{Function, Native, NotCompiled};
 use crate::robot::RobotSpec;
 use crate::scalar::Scalar;
 
@@ -26,6 +29,9 @@ pub struct Model {
     pub(crate) evaluator: Evaluator,
     /// The robot file after the scenario's overrides: what the parameter table reads.
     pub(crate) robot: RobotSpec,
+    /// The right-hand side and the implicit bristle stage as machine code,
+    /// each compiled on its first use (shared by the model's clones).
+    pub(crate) native: Arc<[OnceLock<Result<Native, NotCompiled>>; 2]>,
 }
 
 impl Model {
@@ -117,12 +123,45 @@ impl Model {
     }
 
     /// State derivative `dx = f(x, u)`. `x` and `dx` have [`Model::n_states`] entries.
-    /// The evaluation depends on the structure (see [`EvaluationPath`]);
+    /// The evaluation depends on the structure (see [`EvaluationPath`]) and
+    /// runs as machine code where it compiles ([`Model::native`]);
     /// [`Model::rhs_general`] is the general path every model can take.
     #[inline]
     pub fn rhs(&self, x: &[f64], inputs: &Inputs, dx: &mut [f64], ws: &mut Workspace) {
-        self.evaluator
-            .rhs(&self.structure, x, &inputs.values(), dx, ws);
+        let inputs = inputs.values();
+        if let Ok(native) = self.native(Function::Rhs)
+            && native.rhs(x, &inputs, dx).is_ok()
+        {
+            return;
+        }
+        self.evaluator.rhs(&self.structure, x, &inputs, dx, ws);
+    }
+
+    /// A function of the model as machine code ([`crate::native`]),
+    /// compiled on the first call; or why it is not compiled, in which case
+    /// every evaluation runs the generic code ([`Model::rhs_of`],
+    /// [`Model::rhs_implicit_of`]). Both give the same numbers.
+    pub fn native(&self, function: Function) -> Result<&Native, &NotCompiled> {
+        let slot = match function {
+            Function::Rhs => &self.native[0],
+            Function::ImplicitStage => &self.native[1],
+        };
+        slot.get_or_init(|| crate::native::compile(self, function))
+            .as_ref()
+    }
+
+    /// The same model with nothing compiled: every evaluation runs the
+    /// generic code (for comparisons and measurements).
+    pub fn interpreted(&self) -> Model {
+        let off = || {
+            let slot = OnceLock::new();
+            let _ = slot.set(Err(NotCompiled::Disabled));
+            slot
+        };
+        Model {
+            native: Arc::new([off(), off()]),
+            ..self.clone()
+        }
     }
 
     /// [`Model::rhs`] in any scalar type: the evaluation simulation uses,
@@ -153,9 +192,22 @@ impl Model {
         dx: &mut [f64],
         ws: &mut Workspace,
     ) {
-        ws.bristles.set_step(step);
+        self.rhs_implicit_of(x, inputs, step, dx, ws);
+    }
+
+    /// [`Model::rhs_implicit_bristles`] in any scalar type.
+    #[inline]
+    pub fn rhs_implicit_of<S: Scalar>(
+        &self,
+        x: &mut [S],
+        inputs: &InputValues<S>,
+        step: S,
+        dx: &mut [S],
+        ws: &mut Workspace<S>,
+    ) {
+        ws.bristles.set_step(Some(step));
         self.evaluator.rhs(&self.structure, x, inputs, dx, ws);
-        ws.bristles.set_step(0.0);
+        ws.bristles.set_step(None);
         for (contact, z) in self.structure.frictions.iter().zip(ws.bristles.solved()) {
             x[contact.z_index] = *z;
         }

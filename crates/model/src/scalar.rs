@@ -4,6 +4,8 @@
 //! implementation serves both, so the linearisation differentiates exactly the
 //! code that is simulated.
 
+use std::cmp::Ordering;
+
 use nalgebra::RealField;
 pub use num_dual::{Dual64, DualSVec64};
 
@@ -17,6 +19,23 @@ pub trait Scalar: RealField + Copy {
     /// changing the value or the derivative. (Comparisons of dual numbers
     /// read the real part only, so `x == 0` is not this.)
     fn is_exactly_zero(self) -> bool;
+    /// The value compared with `other` (the real part, for dual numbers):
+    /// how the physics branches on a value, so that a compiled evaluation
+    /// can check the same branch is taken.
+    fn compare_value(self, other: f64) -> Option<Ordering> {
+        self.value().partial_cmp(&other)
+    }
+    /// |v|, with derivative 0 at v = 0 (the middle of its subdifferential).
+    /// The LuGre bristle law has this kink at zero sliding velocity;
+    /// linearising a stuck contact uses the zero slope, as the paper's
+    /// sticking Jacobians do.
+    fn kink_abs(self) -> Self {
+        if self.value() == 0.0 {
+            Self::zero()
+        } else {
+            self.abs()
+        }
+    }
 }
 
 impl Scalar for f64 {
@@ -31,6 +50,11 @@ impl Scalar for f64 {
     #[inline]
     fn is_exactly_zero(self) -> bool {
         self == 0.0
+    }
+    /// |v| (at zero both are +0).
+    #[inline]
+    fn kink_abs(self) -> Self {
+        self.abs()
     }
 }
 
@@ -66,10 +90,8 @@ impl<const N: usize> Scalar for DualSVec64<N> {
     }
 }
 
-/// |v|, with derivative 0 at v = 0 (the middle of its subdifferential). The
-/// LuGre bristle law has this kink at zero sliding velocity; linearising a
-/// stuck contact uses the zero slope, as the paper's sticking Jacobians do.
+/// |v| with derivative 0 at v = 0 ([`Scalar::kink_abs`]).
 #[inline]
 pub fn kink_abs<S: Scalar>(v: S) -> S {
-    if v.value() == 0.0 { S::zero() } else { v.abs() }
+    v.kink_abs()
 }

@@ -6,6 +6,7 @@
 //! that end on the friction law's kinks ([`KinkPredictor`]), the step
 //! budget and the mapping of integrator failures to [`SimError`].
 
+use fistage_model::native::{Function, Native};
 use fistage_model::{InputValues, Model, Workspace};
 use std::ops::ControlFlow;
 
@@ -26,6 +27,10 @@ pub(crate) struct ModelSystem<'a> {
     workspace: &'a mut Workspace,
     /// The bristle states (implicit in the implicit-explicit integrator).
     bristles: Vec<usize>,
+    /// The right-hand side as machine code, where the model compiles.
+    native: Option<&'a Native>,
+    /// The implicit bristle stage as machine code, compiled on first use.
+    native_implicit: Option<Option<&'a Native>>,
 }
 
 impl<'a> ModelSystem<'a> {
@@ -42,6 +47,8 @@ impl<'a> ModelSystem<'a> {
                 .then(|| excitation.inputs(0.0).values()),
             workspace,
             bristles: model.bristle_states(),
+            native: model.native(Function::Rhs).ok(),
+            native_implicit: None,
         }
     }
 
@@ -71,6 +78,11 @@ impl OdeSystem for ModelSystem<'_> {
     #[inline]
     fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
         let inputs = self.inputs(t);
+        if let Some(native) = self.native
+            && native.rhs(x, &inputs, dx).is_ok()
+        {
+            return;
+        }
         self.model.rhs_of(x, &inputs, dx, self.workspace);
     }
 }
@@ -83,6 +95,15 @@ impl SplitSystem for ModelSystem<'_> {
     #[inline]
     fn rhs_implicit(&mut self, t: f64, x: &mut [f64], step: f64, dx: &mut [f64]) {
         let inputs = self.inputs(t);
+        let model = self.model;
+        let native = *self
+            .native_implicit
+            .get_or_insert_with(|| model.native(Function::ImplicitStage).ok());
+        if let Some(native) = native
+            && native.implicit_stage(x, &inputs, step, dx).is_ok()
+        {
+            return;
+        }
         self.model
             .rhs_implicit_bristles(x, &inputs, step, dx, self.workspace);
     }

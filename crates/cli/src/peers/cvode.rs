@@ -5,9 +5,10 @@
 //! `libsundials-dev`, version 6): it is not a dependency of the program, and
 //! without it the bench says so and goes on.
 //!
-//! The right-hand side CVODE calls is the model's own (`Model::rhs_of`), with
-//! no adaptor in between beyond reading the excitation, so the comparison is
-//! between the integrators. CVODE restarts at every discontinuity of the
+//! The right-hand side CVODE calls is the model's own (`Model::rhs`, the
+//! compiled one where the model compiles, as the native engines call it),
+//! with no adaptor in between beyond reading the excitation, so the
+//! comparison is between the integrators. CVODE restarts at every discontinuity of the
 //! inputs (`CVodeReInit` at a stop time), as the native driver does, and its
 //! samples come from its own interpolation (`CV_NORMAL`).
 
@@ -211,8 +212,9 @@ unsafe extern "C" fn rhs(t: RealType, y: Opaque, ydot: Opaque, data: *mut c_void
                 std::slice::from_raw_parts_mut((plant.cvode.array_pointer)(ydot), n),
             )
         };
-        let inputs = plant.inputs(t).values();
-        plant.model.rhs_of(x, &inputs, dx, &mut plant.workspace);
+        plant
+            .model
+            .rhs(x, &plant.inputs(t), dx, &mut plant.workspace);
         if dx.iter().all(|v| v.is_finite()) {
             0
         } else {

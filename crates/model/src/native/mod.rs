@@ -1,0 +1,400 @@
+//! The model's right-hand side as machine code.
+//!
+//! The generic evaluation ([`crate::Model::rhs_of`]) runs once on
+//! [`Traced`] values, which record every floating-point operation it
+//! performs (module `tape`); that record is compiled to a native function
+//! (module `emit`, through Cranelift). Everything the structure decides (the evaluation
+//! path, which elements exist, the servo's options, zero rows) is decided
+//! once, while recording; what is left is straight-line arithmetic with the
+//! model's numbers in the instructions, the cost a kernel written by hand for
+//! that one stage would have, for any robot file.
+//!
+//! The compiled function performs the evaluation's operations in the same
+//! order, so it gives the same numbers (up to the sign of a zero, and for
+//! finite states); [`compile`] checks that on states of its own before it
+//! hands the function out, and the tests check it on every shipped stage.
+//! Where the evaluation branched on a value (the rotation of a bushing above
+//! or below 0.01 rad, say), the compiled function checks that the branch
+//! still goes the recorded way and otherwise gives up ([`Bail`]); the
+//! caller then evaluates as before. An evaluation that does what compiled
+//! code cannot repeat (reads a value out as a number, as the Dahl model's
+//! direction does) is not compiled at all ([`NotCompiled`]).
+//!
+//! Two functions are compiled: the right-hand side, and the implicit stage
+//! of the bristle states ([`crate::Model::rhs_implicit_bristles`]) when the
+//! model has any.
+
+mod calls;
+mod emit;
+mod tape;
+mod traced;
+
+use std::fmt;
+
+pub use traced::Traced;
+
+use crate::model::Model;
+use crate::values::InputValues;
+use emit::{Code, Generator, KernelFn};
+use tape::{Output, Slot, Tape};
+
+/// One compiled function of a model: its right-hand side ([`Native::rhs`])
+/// or the implicit stage of its bristle states ([`Native::implicit_stage`]).
+pub struct Native {
+    n_states: usize,
+    function: KernelFn,
+    operations: usize,
+    guards: usize,
+    compile_time: std::time::Duration,
+    /// Owns the memory the function lives in (freed on drop).
+    _code: Code,
+}
+
+impl fmt::Debug for Native {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Native")
+            .field("n_states", &self.n_states)
+            .field("operations", &self.operations)
+            .field("guards", &self.guards)
+            .field("compile_time", &self.compile_time)
+            .finish()
+    }
+}
+
+/// A compiled function found a branch of the evaluation going another way
+/// than when it was recorded, and stored nothing: evaluate as before.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Bail;
+
+/// Why a model's right-hand side is not compiled.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum NotCompiled {
+    /// The evaluation does something compiled code cannot repeat.
+    #[error("{0}")]
+    Unsupported(String),
+    /// The machine or the code generator could not produce the code.
+    #[error("no native code: {0}")]
+    CodeGeneration(String),
+    /// The compiled function disagreed with the evaluation on a check state.
+    #[error(
+        "the compiled {function} gave {compiled:e} for {quantity} where the evaluation gives {evaluated:e}"
+    )]
+    Disagrees {
+        /// Which function.
+        function: &'static str,
+        /// Which output.
+        quantity: String,
+        /// The compiled function's value.
+        compiled: f64,
+        /// The evaluation's value.
+        evaluated: f64,
+    },
+    /// The model has no bristle states, so no implicit stage.
+    #[error("the model has no bristle states")]
+    NoBristles,
+    /// Switched off for this model ([`Model::interpreted`]).
+    #[error("switched off")]
+    Disabled,
+}
+
+/// Which function of a model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Function {
+    /// The right-hand side, as [`Model::rhs`].
+    Rhs,
+    /// The implicit stage of the bristle states, as
+    /// [`Model::rhs_implicit_bristles`].
+    ImplicitStage,
+}
+
+impl Function {
+    fn name(self) -> &'static str {
+        match self {
+            Self::Rhs => "right-hand side",
+            Self::ImplicitStage => "implicit bristle stage",
+        }
+    }
+}
+
+impl Native {
+    /// Floating-point operations in the compiled function.
+    pub fn operations(&self) -> usize {
+        self.operations
+    }
+
+    /// Branches of the evaluation the compiled function checks.
+    pub fn guards(&self) -> usize {
+        self.guards
+    }
+
+    /// How long recording, compiling and checking it took.
+    pub fn compile_time(&self) -> std::time::Duration {
+        self.compile_time
+    }
+
+    /// The state derivative at `x`, as [`Model::rhs`] (for the compiled
+    /// right-hand side).
+    #[inline]
+    pub fn rhs(&self, x: &[f64], inputs: &InputValues<f64>, dx: &mut [f64]) -> Result<(), Bail> {
+        if x.len() < self.n_states || dx.len() < self.n_states {
+            return Err(Bail);
+        }
+        let inputs = input_array(inputs);
+        // SAFETY: a right-hand side reads `n_states` entries of `x` and four
+        // of `inputs` and writes `n_states` entries of `dx`; it stores nothing
+        // into `x`. The lengths are checked above.
+        let status = unsafe {
+            (self.function)(x.as_ptr().cast_mut(), dx.as_mut_ptr(), inputs.as_ptr(), 0.0)
+        };
+        if status == 0 { Ok(()) } else { Err(Bail) }
+    }
+
+    /// The implicit stage of the bristle states, as
+    /// [`Model::rhs_implicit_bristles`] (for the compiled implicit stage).
+    #[inline]
+    pub fn implicit_stage(
+        &self,
+        x: &mut [f64],
+        inputs: &InputValues<f64>,
+        step: f64,
+        dx: &mut [f64],
+    ) -> Result<(), Bail> {
+        if x.len() < self.n_states || dx.len() < self.n_states {
+            return Err(Bail);
+        }
+        let inputs = input_array(inputs);
+        // SAFETY: as for `rhs`; the implicit stage also stores the solved
+        // bristle states into `x`, within its `n_states` entries, after
+        // every load and only when every guard held.
+        let status =
+            unsafe { (self.function)(x.as_mut_ptr(), dx.as_mut_ptr(), inputs.as_ptr(), step) };
+        if status == 0 { Ok(()) } else { Err(Bail) }
+    }
+}
+
+/// The inputs in the order the compiled functions read them.
+#[inline]
+fn input_array(inputs: &InputValues<f64>) -> [f64; 4] {
+    [
+        inputs.reference_position,
+        inputs.reference_velocity,
+        inputs.servo_force,
+        inputs.platform_velocity,
+    ]
+}
+
+/// The state and inputs the evaluation is recorded at: the zero
+/// configuration moved a little in every coordinate (so that no value sits
+/// exactly on a branch point), with small rotations and slow motion, where
+/// stages spend their time.
+fn recording_point(model: &Model, seed: u64) -> (Vec<f64>, InputValues<f64>) {
+    let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    let nominal = &model.layout().nominal;
+    let x = model
+        .zero_state()
+        .iter()
+        .zip(nominal)
+        .map(|(zero, scale)| zero + 0.1 * scale * next())
+        .collect();
+    let inputs = InputValues {
+        reference_position: 1e-4 * next(),
+        reference_velocity: 1e-3 * next(),
+        servo_force: 0.1 * next(),
+        platform_velocity: 0.02 * next(),
+    };
+    (x, inputs)
+}
+
+/// Records `function` at `x`, `inputs`.
+fn trace(
+    model: &Model,
+    x: &[f64],
+    inputs: &InputValues<f64>,
+    function: Function,
+) -> Result<Tape, NotCompiled> {
+    let n = model.n_states();
+    tape::record(|| {
+        let mut state: Vec<Traced> = x
+            .iter()
+            .enumerate()
+            .map(|(i, v)| Traced::input(Slot::State(i as u32), *v))
+            .collect();
+        let input = |k: u32, v: f64| Traced::input(Slot::Input(k), v);
+        let traced_inputs = InputValues {
+            reference_position: input(0, inputs.reference_position),
+            reference_velocity: input(1, inputs.reference_velocity),
+            servo_force: input(2, inputs.servo_force),
+            platform_velocity: input(3, inputs.platform_velocity),
+        };
+        let mut ws = model.workspace_of::<Traced>();
+        let mut dx = vec![<Traced as crate::Scalar>::constant(0.0); n];
+        let mut outputs = Vec::with_capacity(n);
+        if function == Function::ImplicitStage {
+            let step = Traced::input(Slot::Step, 1e-5);
+            model.rhs_implicit_of(&mut state, &traced_inputs, step, &mut dx, &mut ws);
+            outputs.extend(
+                model
+                    .bristle_states()
+                    .into_iter()
+                    .map(|i| (Output::State(i as u32), state[i].node())),
+            );
+        } else {
+            model.rhs_of(&state, &traced_inputs, &mut dx, &mut ws);
+        }
+        outputs.extend(
+            dx.iter()
+                .enumerate()
+                .map(|(i, d)| (Output::Derivative(i as u32), d.node())),
+        );
+        outputs
+    })
+    .map_err(NotCompiled::Unsupported)
+}
+
+/// Compiles `function` of `model` and checks it against the evaluation at
+/// states of its own.
+pub fn compile(model: &Model, function: Function) -> Result<Native, NotCompiled> {
+    let started = std::time::Instant::now();
+    if function == Function::ImplicitStage && model.bristle_states().is_empty() {
+        return Err(NotCompiled::NoBristles);
+    }
+    let (x, inputs) = recording_point(model, 1);
+    let tape = trace(model, &x, &inputs, function)?;
+    let mut generator = Generator::host().map_err(NotCompiled::CodeGeneration)?;
+    let id = generator
+        .add("function", &tape)
+        .map_err(NotCompiled::CodeGeneration)?;
+    let (function_pointer, code) = generator.finish(id).map_err(NotCompiled::CodeGeneration)?;
+    let mut native = Native {
+        n_states: model.n_states(),
+        function: function_pointer,
+        operations: tape.operations(),
+        guards: tape.guards.len(),
+        compile_time: std::time::Duration::ZERO,
+        _code: code,
+    };
+    for seed in 1..=4 {
+        check(model, &native, function, seed)?;
+    }
+    native.compile_time = started.elapsed();
+    Ok(native)
+}
+
+/// The compiled `function` against the evaluation at the recording state of
+/// `seed`: the same numbers, or the reason not to use it.
+fn check(model: &Model, native: &Native, function: Function, seed: u64) -> Result<(), NotCompiled> {
+    let n = model.n_states();
+    let (x, inputs) = recording_point(model, seed);
+    let names = &model.layout().names;
+    let mut ws = model.workspace();
+    let (mut expected, mut got) = (vec![0.0; n], vec![0.0; n]);
+    let (mut x_expected, mut x_got) = (x.clone(), x);
+    let ran = match function {
+        Function::Rhs => {
+            model.rhs_of(&x_expected, &inputs, &mut expected, &mut ws);
+            native.rhs(&x_got, &inputs, &mut got)
+        }
+        Function::ImplicitStage => {
+            let step = 2e-5;
+            model.rhs_implicit_of(&mut x_expected, &inputs, step, &mut expected, &mut ws);
+            native.implicit_stage(&mut x_got, &inputs, step, &mut got)
+        }
+    };
+    if ran.is_err() {
+        return Ok(());
+    }
+    let pairs = (got.iter().zip(&expected).map(|(g, e)| ("rate", g, e)))
+        .chain(x_got.iter().zip(&x_expected).map(|(g, e)| ("value", g, e)));
+    for (i, (what, &compiled, &evaluated)) in pairs.enumerate() {
+        let same = compiled == evaluated || (compiled.is_nan() && evaluated.is_nan());
+        if !same {
+            return Err(NotCompiled::Disagrees {
+                function: function.name(),
+                quantity: format!("the {what} of {}", names[i % n]),
+                compiled,
+                evaluated,
+            });
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn shipped(scenario: &str) -> crate::Loaded {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        crate::load(&root.join(scenario)).expect("loads")
+    }
+
+    /// The tape itself, evaluated in Rust, gives the evaluation's numbers:
+    /// the recording (not only its machine code) is faithful.
+    #[test]
+    fn the_recorded_tape_gives_the_evaluations_numbers() {
+        for scenario in [
+            "scenarios/paper/fig05b_fi.toml",
+            "scenarios/bench/axis_4fi_fig05b.toml",
+            "scenarios/coupling/friction20_traverse.toml",
+            "scenarios/paper/fig03b_dob_fi.toml",
+        ] {
+            let model = &shipped(scenario).model;
+            let n = model.n_states();
+            let (x0, inputs0) = recording_point(model, 1);
+            for function in [Function::Rhs, Function::ImplicitStage] {
+                let tape = trace(model, &x0, &inputs0, function).expect("records");
+                let mut ws = model.workspace();
+                for seed in 2..12 {
+                    let (x, inputs) = recording_point(model, seed);
+                    let step = 3e-5;
+                    let (mut x_expected, mut expected) = (x.clone(), vec![0.0; n]);
+                    match function {
+                        Function::Rhs => model.rhs_of(&x, &inputs, &mut expected, &mut ws),
+                        Function::ImplicitStage => model.rhs_implicit_of(
+                            &mut x_expected,
+                            &inputs,
+                            step,
+                            &mut expected,
+                            &mut ws,
+                        ),
+                    }
+                    let got = tape
+                        .evaluate(&x, &input_array(&inputs), step)
+                        .expect("the recorded branches hold near the recording state");
+                    for (&(output, _), value) in tape.outputs.iter().zip(got) {
+                        let wanted = match output {
+                            Output::Derivative(i) => expected[i as usize],
+                            Output::State(i) => x_expected[i as usize],
+                        };
+                        assert_eq!(value, wanted, "{scenario}: {function:?} {output:?}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// Structure is decided while recording: a rail stage's tape holds
+    /// arithmetic only (no guard), and products with the zero entries of
+    /// its rows are not recorded.
+    #[test]
+    fn a_rail_stage_records_straight_line_arithmetic() {
+        let model = &shipped("scenarios/paper/fig05b_fi.toml").model;
+        let (x, inputs) = recording_point(model, 1);
+        let tape = trace(model, &x, &inputs, Function::Rhs).expect("records");
+        assert!(tape.guards.is_empty());
+        // Two masses, one bushing, one contact and a PD servo: a few dozen
+        // operations (the hand-written kernel of bench --rhs has about 25).
+        let operations = tape.operations();
+        assert!((20..60).contains(&operations), "{operations}");
+        let dahl = &shipped("scenarios/paper/fig03a_ff_fi.toml").model;
+        let (x, inputs) = recording_point(dahl, 1);
+        let refused = trace(dahl, &x, &inputs, Function::Rhs).expect_err("not compiled");
+        assert!(refused.to_string().contains("reads a value"), "{refused}");
+    }
+}
