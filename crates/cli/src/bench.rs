@@ -84,6 +84,10 @@ pub struct BenchArgs {
     /// and 8 bearings (5, 14, 26 states), and on the 6-DOF four-bearing stage.
     #[arg(long)]
     pub rhs: bool,
+    /// Time each engine also on the generic evaluation of the right-hand
+    /// side (no machine code), in rows of its own beside the compiled ones.
+    #[arg(long)]
+    pub interpreted: bool,
     /// Python with FMPy for the FMU table (default: the test environment's,
     /// `target/fmi-venv/bin/python`, else `python3`).
     #[arg(long)]
@@ -441,6 +445,16 @@ fn engine_table(args: &BenchArgs, scenario: &Path, rtols: &[f64]) -> anyhow::Res
         args.repeat,
         signal,
     );
+    println!("{}\n", compile_note(&loaded.model));
+    let interpreted = Loaded {
+        model: loaded.model.interpreted(),
+        ..loaded.clone()
+    };
+    let evaluations: Vec<(&Loaded, &str)> = if args.interpreted {
+        vec![(&loaded, ""), (&interpreted, ", generic evaluation")]
+    } else {
+        vec![(&loaded, "")]
+    };
     println!(
         "| rtol | wall ms | CPU ms | x real time | steps | rejected | RHS evals | max error (m) | relative error | method |"
     );
@@ -451,13 +465,16 @@ fn engine_table(args: &BenchArgs, scenario: &Path, rtols: &[f64]) -> anyhow::Res
     let mut peer_rows: Vec<(String, Vec<AccuracyRow>)> = Vec::new();
     for &rtol in rtols {
         let mut first = None;
-        for engine in &timed {
-            let timing = time_run(&loaded, engine.as_ref(), rtol, args.repeat)?;
+        for (engine, (evaluated, label)) in timed
+            .iter()
+            .flat_map(|engine| evaluations.iter().map(move |e| (engine, e)))
+        {
+            let timing = time_run(evaluated, engine.as_ref(), rtol, args.repeat)?;
             let (error, relative) =
                 max_deviation(&loaded, &timing.trajectory, &reference.trajectory, &signal)?;
             let counts = timing.trajectory.stats.counts;
             println!(
-                "| {rtol:.0e} | {:.2} | {:.2} | {:.0} | {} | {} | {} | {error:.2e} | {relative:.2e} | fistage {} |",
+                "| {rtol:.0e} | {:.2} | {:.2} | {:.0} | {} | {} | {} | {error:.2e} | {relative:.2e} | fistage {}{label} |",
                 timing.wall_s * 1e3,
                 timing.cpu_s * 1e3,
                 simulated / timing.cpu_s,
@@ -546,6 +563,31 @@ fn engine_table(args: &BenchArgs, scenario: &Path, rtols: &[f64]) -> anyhow::Res
     }
     print_matched(&fistage_rows, &peer_rows);
     Ok(())
+}
+
+/// What was compiled to machine code for `model` and how long that took
+/// (once per model, before any timed run), or why nothing was.
+fn compile_note(model: &fistage_model::Model) -> String {
+    use fistage_model::native::{Function, NotCompiled};
+    let parts: Vec<String> = [
+        (Function::Rhs, "right-hand side"),
+        (Function::ImplicitStage, "implicit bristle stage"),
+    ]
+    .into_iter()
+    .filter_map(|(function, name)| match model.native(function) {
+        Ok(native) => Some(format!(
+            "{name} compiled to machine code in {:.1} ms ({} operations)",
+            native.compile_time().as_secs_f64() * 1e3,
+            native.operations()
+        )),
+        Err(NotCompiled::NoBristles) => None,
+        Err(why) => Some(format!("{name} evaluated generically ({why})")),
+    })
+    .collect();
+    format!(
+        "{}; once per model, before the timed runs.",
+        parts.join(", ")
+    )
 }
 
 /// The Python the SciPy peer runs: `--python`, else the package's test environment, else python3.
