@@ -1,7 +1,8 @@
 //! Machine code for a [`Tape`], through Cranelift: one function per tape,
-//! straight-line code with the constants in the instructions, a branch out
-//! at each guard, and the outputs stored only once every guard has held (a
-//! function that gives up has written nothing).
+//! straight-line code with the constants in the instructions in the order of
+//! [`Tape::schedule`], then a branch out at each guard, and the outputs
+//! stored only once every guard has held (a function that gives up has
+//! written nothing).
 //!
 //! The functions have the C signature
 //! `u32 f(double *x, double *dx, const double *inputs, double step)`
@@ -158,18 +159,13 @@ impl<'a, 'b> Writer<'a, 'b> {
     }
 
     fn body(&mut self, tape: &Tape) -> Result<(), String> {
-        let live = tape.live();
         let mut values: Vec<Option<Value>> = vec![None; tape.nodes.len()];
-        let mut guards = tape.guards.iter().peekable();
-        for (i, node) in tape.nodes.iter().enumerate() {
-            while let Some((_, guard)) = guards.next_if(|(at, _)| *at <= i) {
-                self.guard(guard, &values)?;
-            }
-            if live[i] {
-                values[i] = Some(self.node(node, &values)?);
-            }
+        for i in tape.schedule() {
+            values[i] = Some(self.node(&tape.nodes[i], &values)?);
         }
-        for (_, guard) in guards {
+        // Every value is computed (pure operations, whatever the branches);
+        // the guards decide whether any is stored.
+        for (_, guard) in &tape.guards {
             self.guard(guard, &values)?;
         }
         let memory = MemFlagsData::trusted();

@@ -155,6 +155,43 @@ impl Tape {
         live
     }
 
+    /// The order to compute the live nodes in: each library call as early
+    /// as its operands allow (with only those operands computed before it),
+    /// then everything else in recorded order. A call clobbers every
+    /// floating-point register, so values computed before it must be kept
+    /// in memory across it; calls first keeps that to the calls' own
+    /// results. The operations are pure, so the order changes no number.
+    pub(crate) fn schedule(&self) -> Vec<usize> {
+        let live = self.live();
+        let mut done = vec![false; self.nodes.len()];
+        let mut order = Vec::with_capacity(self.nodes.len());
+        let mut stack = Vec::new();
+        let calls = (0..self.nodes.len())
+            .filter(|&i| live[i] && matches!(self.nodes[i], Node::Call1(..) | Node::Call2(..)));
+        for call in calls {
+            // Post-order walk of the call's operands (each after its own).
+            stack.push((call, false));
+            while let Some((i, expanded)) = stack.pop() {
+                if done[i] {
+                    continue;
+                }
+                if expanded {
+                    done[i] = true;
+                    order.push(i);
+                } else {
+                    stack.push((i, true));
+                    for operand in operands(&self.nodes[i]) {
+                        if !done[operand as usize] {
+                            stack.push((operand as usize, false));
+                        }
+                    }
+                }
+            }
+        }
+        order.extend((0..self.nodes.len()).filter(|&i| live[i] && !done[i]));
+        order
+    }
+
     /// Number of live operations (constants and inputs not counted).
     pub(crate) fn operations(&self) -> usize {
         let live = self.live();
@@ -378,10 +415,27 @@ impl Recorder {
     }
 
     /// An operand the node equals: `x * 1`, `1 * x`, `x / 1`, `x + 0`,
-    /// `0 + x`, `x - 0`; and a zero for a product with a zero coefficient.
+    /// `0 + x`, `x - 0`, `-(-x)`; a zero for a product with a zero
+    /// coefficient; and the same number by a cheaper operation: `-x` for
+    /// `x * -1`, `a - b` for `a + (-b)`, `a + b` for `a - (-b)` (IEEE
+    /// subtraction is the addition of the negation).
     fn forward(&mut self, node: &Node) -> Option<NodeId> {
         let is = |r: &Self, id: NodeId, c: f64| r.constant(id).is_some_and(|v| v == c);
+        let negated = |r: &Self, id: NodeId| match r.tape.nodes[id as usize] {
+            Node::Neg(inner) => Some(inner),
+            _ => None,
+        };
+        let value = |r: &Self, id: NodeId| r.values[id as usize];
         match *node {
+            Node::Neg(a) if let Some(inner) = negated(self, a) => Some(inner),
+            Node::Mul(a, b) if is(self, b, -1.0) => Some(self.push(Node::Neg(a), -value(self, a))),
+            Node::Mul(a, b) if is(self, a, -1.0) => Some(self.push(Node::Neg(b), -value(self, b))),
+            Node::Add(a, b) if let Some(inner) = negated(self, b) => {
+                Some(self.push(Node::Sub(a, inner), value(self, a) - value(self, inner)))
+            }
+            Node::Sub(a, b) if let Some(inner) = negated(self, b) => {
+                Some(self.push(Node::Add(a, inner), value(self, a) + value(self, inner)))
+            }
             Node::Mul(a, b) if is(self, b, 1.0) => Some(a),
             Node::Mul(a, b) if is(self, a, 1.0) => Some(b),
             Node::Div(a, b) if is(self, b, 1.0) => Some(a),
