@@ -126,40 +126,71 @@ pub(crate) struct Timing {
     trajectory: Trajectory,
 }
 
+/// Timed runs of one engine on one model at one tolerance, one at a time.
+struct RunTimer<'a> {
+    loaded: &'a Loaded,
+    x0: Vec<f64>,
+    excitation: ScenarioExcitation,
+    settings: SimSettings,
+    walls: Vec<f64>,
+    cpus: Vec<f64>,
+    last: Option<Trajectory>,
+}
+
+impl<'a> RunTimer<'a> {
+    fn new(loaded: &'a Loaded, rtol: f64) -> anyhow::Result<Self> {
+        let scenario = &loaded.scenario;
+        Ok(Self {
+            loaded,
+            x0: initial_state(&loaded.model, scenario)?,
+            excitation: ScenarioExcitation::from_scenario(scenario),
+            settings: SimSettings {
+                rtol,
+                ..SimSettings::from_scenario(scenario)
+            },
+            walls: Vec::new(),
+            cpus: Vec::new(),
+            last: None,
+        })
+    }
+
+    /// One timed run.
+    fn once(&mut self, engine: &dyn Engine) -> anyhow::Result<()> {
+        let (wall, cpu) = (Instant::now(), thread_cpu_time());
+        let trajectory = engine.simulate(
+            &self.loaded.model,
+            &self.x0,
+            &self.excitation,
+            &self.settings,
+            &mut fistage_sim::no_progress,
+        )?;
+        self.cpus.push(thread_cpu_time() - cpu);
+        self.walls.push(wall.elapsed().as_secs_f64());
+        self.last = Some(trajectory);
+        Ok(())
+    }
+
+    /// The median times and the last run.
+    fn finish(mut self) -> anyhow::Result<Timing> {
+        Ok(Timing {
+            wall_s: median(&mut self.walls),
+            cpu_s: median(&mut self.cpus),
+            trajectory: self.last.context("no run")?,
+        })
+    }
+}
+
 fn time_run(
     loaded: &Loaded,
     engine: &dyn Engine,
     rtol: f64,
     repeat: usize,
 ) -> anyhow::Result<Timing> {
-    let scenario = &loaded.scenario;
-    let x0 = initial_state(&loaded.model, scenario)?;
-    let excitation = ScenarioExcitation::from_scenario(scenario);
-    let settings = SimSettings {
-        rtol,
-        ..SimSettings::from_scenario(scenario)
-    };
-    let mut walls = Vec::with_capacity(repeat);
-    let mut cpus = Vec::with_capacity(repeat);
-    let mut last = None;
+    let mut timer = RunTimer::new(loaded, rtol)?;
     for _ in 0..repeat.max(1) {
-        let (wall, cpu) = (Instant::now(), thread_cpu_time());
-        let trajectory = engine.simulate(
-            &loaded.model,
-            &x0,
-            &excitation,
-            &settings,
-            &mut fistage_sim::no_progress,
-        )?;
-        cpus.push(thread_cpu_time() - cpu);
-        walls.push(wall.elapsed().as_secs_f64());
-        last = Some(trajectory);
+        timer.once(engine)?;
     }
-    Ok(Timing {
-        wall_s: median(&mut walls),
-        cpu_s: median(&mut cpus),
-        trajectory: last.context("no run")?,
-    })
+    timer.finish()
 }
 
 pub(crate) fn median(values: &mut [f64]) -> f64 {
@@ -463,13 +494,44 @@ fn engine_table(args: &BenchArgs, scenario: &Path, rtols: &[f64]) -> anyhow::Res
     let mut ratios = Vec::new();
     let mut fistage_rows = Vec::new();
     let mut peer_rows: Vec<(String, Vec<AccuracyRow>)> = Vec::new();
+    // One run of every contender per round, the rounds one after the other:
+    // fistage's engines (and their generic evaluation) and, with --peers,
+    // CVODE's methods, at every tolerance, so a drift of the machine's speed
+    // falls on all of them alike.
+    let contenders: Vec<(&dyn Engine, &Loaded, &str)> = timed
+        .iter()
+        .flat_map(|engine| {
+            evaluations
+                .iter()
+                .map(move |(l, s)| (engine.as_ref(), *l, *s))
+        })
+        .collect();
+    let mut per_rtol = Vec::with_capacity(rtols.len());
     for &rtol in rtols {
-        let mut first = None;
-        for (engine, (evaluated, label)) in timed
+        let runs: Vec<RunTimer> = contenders
             .iter()
-            .flat_map(|engine| evaluations.iter().map(move |e| (engine, e)))
-        {
-            let timing = time_run(evaluated, engine.as_ref(), rtol, args.repeat)?;
+            .map(|(_, evaluated, _)| RunTimer::new(evaluated, rtol))
+            .collect::<anyhow::Result<_>>()?;
+        let cvode_timer = match &cvode {
+            Some(Ok(cvode)) => Some(crate::peers::CvodeTimer::new(cvode, &loaded, rtol)?),
+            _ => None,
+        };
+        per_rtol.push((rtol, runs, cvode_timer));
+    }
+    for _ in 0..args.repeat.max(1) {
+        for (_, runs, cvode_timer) in &mut per_rtol {
+            for (run, (engine, _, _)) in runs.iter_mut().zip(&contenders) {
+                run.once(*engine)?;
+            }
+            if let Some(timer) = cvode_timer {
+                timer.round();
+            }
+        }
+    }
+    for (rtol, runs, cvode_timer) in per_rtol {
+        let mut first = None;
+        for (run, (_, _, label)) in runs.into_iter().zip(&contenders) {
+            let timing = run.finish()?;
             let (error, relative) =
                 max_deviation(&loaded, &timing.trajectory, &reference.trajectory, &signal)?;
             let counts = timing.trajectory.stats.counts;
@@ -494,12 +556,13 @@ fn engine_table(args: &BenchArgs, scenario: &Path, rtols: &[f64]) -> anyhow::Res
         }
         let timing = first.context("no engine timed")?;
         let Some(cvode) = &cvode else { continue };
-        let mut peers = match cvode {
-            Ok(cvode) => crate::peers::cvode_runs(cvode, &loaded, rtol, args.repeat)?,
-            Err(reason) => vec![Err(crate::peers::PeerSkipped {
+        let mut peers = match (cvode, cvode_timer) {
+            (Ok(_), Some(timer)) => timer.finish(),
+            (Err(reason), _) => vec![Err(crate::peers::PeerSkipped {
                 method: "CVODE".into(),
                 reason: reason.clone(),
             })],
+            (Ok(_), None) => Vec::new(),
         };
         let times = &timing.trajectory.times;
         peers.extend(crate::peers::scipy::scipy_runs(

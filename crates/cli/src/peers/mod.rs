@@ -40,56 +40,96 @@ pub struct PeerSkipped {
     pub reason: String,
 }
 
-/// CVODE BDF and Adams on `loaded` at `rtol`, `repeat` runs each (the
-/// median is kept); a method that fails says so instead.
-pub fn cvode_runs(
-    cvode: &cvode::Cvode,
-    loaded: &Loaded,
-    rtol: f64,
-    repeat: usize,
-) -> anyhow::Result<Vec<Result<PeerRun, PeerSkipped>>> {
-    let x0 = initial_state(&loaded.model, &loaded.scenario)?;
-    let excitation = ScenarioExcitation::from_scenario(&loaded.scenario);
-    let settings = SimSettings {
-        rtol,
-        ..SimSettings::from_scenario(&loaded.scenario)
-    };
-    let mut rows = Vec::new();
-    for method in [cvode::CvodeMethod::Bdf, cvode::CvodeMethod::Adams] {
-        let mut walls = Vec::with_capacity(repeat);
-        let mut cpus = Vec::with_capacity(repeat);
-        let mut last = None;
-        let mut failure = None;
-        for _ in 0..repeat.max(1) {
+/// CVODE BDF and Adams on one model at one tolerance, timed one run at a
+/// time so that the bench can alternate them with its own runs (a drift of
+/// the machine's speed then falls on every contender alike).
+pub struct CvodeTimer<'a> {
+    cvode: &'a cvode::Cvode,
+    loaded: &'a Loaded,
+    x0: Vec<f64>,
+    excitation: ScenarioExcitation,
+    settings: SimSettings,
+    methods: Vec<MethodTimes>,
+}
+
+/// The runs of one method so far.
+struct MethodTimes {
+    method: cvode::CvodeMethod,
+    walls: Vec<f64>,
+    cpus: Vec<f64>,
+    last: Option<cvode::CvodeRun>,
+    failure: Option<String>,
+}
+
+impl<'a> CvodeTimer<'a> {
+    /// BDF and Adams on `loaded` at `rtol`.
+    pub fn new(cvode: &'a cvode::Cvode, loaded: &'a Loaded, rtol: f64) -> anyhow::Result<Self> {
+        Ok(Self {
+            cvode,
+            loaded,
+            x0: initial_state(&loaded.model, &loaded.scenario)?,
+            excitation: ScenarioExcitation::from_scenario(&loaded.scenario),
+            settings: SimSettings {
+                rtol,
+                ..SimSettings::from_scenario(&loaded.scenario)
+            },
+            methods: [cvode::CvodeMethod::Bdf, cvode::CvodeMethod::Adams]
+                .into_iter()
+                .map(|method| MethodTimes {
+                    method,
+                    walls: Vec::new(),
+                    cpus: Vec::new(),
+                    last: None,
+                    failure: None,
+                })
+                .collect(),
+        })
+    }
+
+    /// One timed run of each method that has not failed.
+    pub fn round(&mut self) {
+        for times in &mut self.methods {
+            if times.failure.is_some() {
+                continue;
+            }
             let (wall, cpu) = (std::time::Instant::now(), thread_cpu_time());
-            match cvode.simulate(method, &loaded.model, &x0, &excitation, &settings) {
+            match self.cvode.simulate(
+                times.method,
+                &self.loaded.model,
+                &self.x0,
+                &self.excitation,
+                &self.settings,
+            ) {
                 Ok(run) => {
-                    cpus.push(thread_cpu_time() - cpu);
-                    walls.push(wall.elapsed().as_secs_f64());
-                    last = Some(run);
+                    times.cpus.push(thread_cpu_time() - cpu);
+                    times.walls.push(wall.elapsed().as_secs_f64());
+                    times.last = Some(run);
                 }
-                Err(e) => {
-                    failure = Some(e);
-                    break;
-                }
+                Err(e) => times.failure = Some(e),
             }
         }
-        rows.push(match (last, failure) {
-            (Some(run), None) => Ok(PeerRun {
-                family: method.label().to_string(),
-                method: format!("{} ({} Jacobians)", method.label(), run.jacobians)
-                    .replace(" (0 Jacobians)", ""),
-                wall_s: median(&mut walls),
-                cpu_s: median(&mut cpus),
-                counts: run.counts,
-                steps_known: true,
-                trajectory: run.trajectory,
-            }),
-            (_, failure) => Err(PeerSkipped {
-                method: method.label().to_string(),
-                reason: failure.unwrap_or_else(|| "no run".into()),
-            }),
-        });
     }
-    Ok(rows)
+
+    /// Each method's median times and last run, or why it did not run.
+    pub fn finish(self) -> Vec<Result<PeerRun, PeerSkipped>> {
+        self.methods
+            .into_iter()
+            .map(|mut times| match (times.last, times.failure) {
+                (Some(run), None) => Ok(PeerRun {
+                    family: times.method.label().to_string(),
+                    method: format!("{} ({} Jacobians)", times.method.label(), run.jacobians)
+                        .replace(" (0 Jacobians)", ""),
+                    wall_s: median(&mut times.walls),
+                    cpu_s: median(&mut times.cpus),
+                    counts: run.counts,
+                    steps_known: true,
+                    trajectory: run.trajectory,
+                }),
+                (_, failure) => Err(PeerSkipped {
+                    method: times.method.label().to_string(),
+                    reason: failure.unwrap_or_else(|| "no run".into()),
+                }),
+            })
+            .collect()
+    }
 }
