@@ -43,7 +43,11 @@ fn bristle_bound_stages_take_imex_and_bushing_bound_ones_do_not() {
     let slipping = load("scenarios/paper/fig06b_fi_vp50.toml");
     let choice = |loaded: &Loaded| {
         let x0 = initial_state(&loaded.model, &loaded.scenario).expect("start");
-        AutoEngine::for_scenario(&loaded.scenario).choice(&loaded.model, &x0)
+        AutoEngine::for_scenario(&loaded.scenario).choice(
+            &loaded.model,
+            &x0,
+            loaded.scenario.solver.rtol,
+        )
     };
     let picked = choice(&slipping);
     println!("fig06b_fi_vp50: {}", picked.reason);
@@ -85,7 +89,11 @@ fn the_choice_reads_the_four_bearing_stage_spectrum() {
     ] {
         let loaded = load(path);
         let x0 = initial_state(&loaded.model, &loaded.scenario).expect("start");
-        let picked = AutoEngine::for_scenario(&loaded.scenario).choice(&loaded.model, &x0);
+        let picked = AutoEngine::for_scenario(&loaded.scenario).choice(
+            &loaded.model,
+            &x0,
+            loaded.scenario.solver.rtol,
+        );
         println!("{path}: {}", picked.reason);
         let full = picked.full_radius.expect("the full spectrum");
         let slipping = loaded.scenario.slipping_inputs();

@@ -135,7 +135,7 @@ impl Scenario {
     /// run(rtol=None, engine=None, progress=None) -> Result: simulates the
     /// scenario (with the interpreter released) and gives its signals as
     /// numpy arrays. `engine` is "auto" (the default), "native", "imex",
-    /// "dop853", "rosenbrock" or "rapier".
+    /// "dop853", "rk4", "rosenbrock" or "rapier".
     /// `progress(fraction)` is called now and then (every 2048 steps);
     /// Ctrl-C, or an exception in the callback, stops the run.
     #[pyo3(signature = (rtol=None, engine=None, progress=None))]

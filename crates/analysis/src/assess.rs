@@ -227,7 +227,7 @@ fn verdict_engine(loaded: &Loaded, x0: &[f64]) -> Box<dyn Engine> {
         kind if kind.is_adaptive() && kind != EngineKind::Auto => {
             fistage_sim::engine_in(scenario, kind)
         }
-        _ => AutoEngine::for_scenario(scenario).resolved(&loaded.model, x0),
+        _ => AutoEngine::for_scenario(scenario).resolved(&loaded.model, x0, scenario.solver.rtol),
     }
 }
 

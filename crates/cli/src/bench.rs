@@ -33,7 +33,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 21)]
     pub repeat: usize,
     /// Engines to time instead of the scenario's own (comma-separated:
-    /// auto, native, imex, dop853, rosenbrock), each in its own rows of the table.
+    /// auto, native, imex, dop853, rk4, rosenbrock), each in its own rows of the table.
     #[arg(long, value_delimiter = ',')]
     pub engine: Vec<String>,
     /// Signal whose error is reported (default: the position read by the

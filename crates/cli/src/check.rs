@@ -59,7 +59,11 @@ fn print_method(loaded: &fistage_model::Loaded) -> anyhow::Result<()> {
         return Ok(());
     }
     let x0 = fistage_sim::initial_state(&loaded.model, scenario)?;
-    let choice = fistage_sim::AutoEngine::for_scenario(scenario).choice(&loaded.model, &x0);
+    let choice = fistage_sim::AutoEngine::for_scenario(scenario).choice(
+        &loaded.model,
+        &x0,
+        scenario.solver.rtol,
+    );
     println!(
         "engine: auto -> {} ({})",
         choice.method.name(),

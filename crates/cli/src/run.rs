@@ -28,7 +28,7 @@ pub struct RunArgs {
     #[arg(long)]
     pub no_plots: bool,
     /// Engine to use instead of the scenario's (`auto`, `native`, `imex`,
-    /// `dop853`, `rosenbrock` or `rapier`).
+    /// `dop853`, `rk4`, `rosenbrock` or `rapier`).
     #[arg(long)]
     pub engine: Option<EngineKind>,
     /// Fixed step of the rapier engine, s (instead of `rapier.dt`).

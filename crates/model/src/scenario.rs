@@ -178,7 +178,8 @@ impl ControllerSettings {
 #[serde(rename_all = "snake_case")]
 pub enum EngineKind {
     /// The cheapest sound adaptive method for the model, chosen before the
-    /// run from its linearisation: `native` or `imex` (what `fistage check` shows).
+    /// run from its linearisation and tolerance: `native`, `imex` or `rk4`
+    /// (what `fistage check` shows).
     #[default]
     Auto,
     /// Error-controlled explicit Dormand-Prince 5(4) (also `dopri5`).
@@ -192,18 +193,24 @@ pub enum EngineKind {
     Imex,
     /// Explicit eighth-order Dormand-Prince pair DOP853, for tight tolerances.
     Dop853,
+    /// The classical fourth-order Runge-Kutta method with a free third-order
+    /// estimate (also `classical`), for loose tolerances on stages held by
+    /// lightly damped stiff modes.
+    #[serde(alias = "classical")]
+    Rk4,
     /// rapier3d-f64 with a fixed step, under the model's own force elements.
     Rapier,
 }
 
 impl EngineKind {
     /// Every engine, in the order help texts list them.
-    pub const ALL: [EngineKind; 6] = [
+    pub const ALL: [EngineKind; 7] = [
         EngineKind::Auto,
         EngineKind::Native,
         EngineKind::Rosenbrock,
         EngineKind::Imex,
         EngineKind::Dop853,
+        EngineKind::Rk4,
         EngineKind::Rapier,
     ];
 
@@ -215,6 +222,7 @@ impl EngineKind {
             EngineKind::Rosenbrock => "rosenbrock",
             EngineKind::Imex => "imex",
             EngineKind::Dop853 => "dop853",
+            EngineKind::Rk4 => "rk4",
             EngineKind::Rapier => "rapier",
         }
     }
@@ -242,6 +250,7 @@ impl std::str::FromStr for EngineKind {
             "rosenbrock" | "implicit" => Ok(EngineKind::Rosenbrock),
             "imex" | "ark548" => Ok(EngineKind::Imex),
             "dop853" => Ok(EngineKind::Dop853),
+            "rk4" | "classical" => Ok(EngineKind::Rk4),
             "rapier" => Ok(EngineKind::Rapier),
             other => Err(format!(
                 "unknown engine \"{other}\" (available: {})",

@@ -33,6 +33,14 @@ impl Gains {
         smallest: 0.2,
         largest: 10.0,
     };
+    /// Fourth-order pairs (the fifth-order gains with the exponent 1/4
+    /// of a third-order estimate).
+    pub const FOURTH_ORDER: Self = Self {
+        alpha: 0.25 - BETA * 0.75,
+        beta: BETA,
+        smallest: 0.2,
+        largest: 10.0,
+    };
     /// Eighth-order pairs (Hairer's DOP853 defaults: an integral controller
     /// with exponent 1/8, factors 1/3 to 6).
     pub const EIGHTH_ORDER: Self = Self {

@@ -15,6 +15,7 @@ use crate::dopri::{DormandPrince, OdeSystem, StepCounts, StepFailure, Tolerances
 use crate::excitation::Excitation;
 use crate::imex::{ImexRungeKutta, SplitSystem};
 use crate::kinks::KinkPredictor;
+use crate::rk4::ClassicalRungeKutta;
 use crate::rosenbrock::{JacobianSystem, Rosenbrock};
 use crate::settings::SimError;
 
@@ -203,6 +204,7 @@ macro_rules! integrating {
 integrating!(DormandPrince);
 integrating!(ImexRungeKutta);
 integrating!(Rosenbrock);
+integrating!(ClassicalRungeKutta);
 
 impl Integrating for Dop853 {
     fn time(&self) -> f64 {

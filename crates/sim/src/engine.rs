@@ -2,7 +2,8 @@
 //! [`Trajectory`] sampled on a uniform grid. The native engine is the
 //! error-controlled Dormand-Prince 5(4) of [`crate::dopri`], the imex engine
 //! the pair of [`crate::imex`], the dop853 engine the eighth-order pair of
-//! [`crate::dop853`], the Rosenbrock engine the linearly implicit method of
+//! [`crate::dop853`], the rk4 engine the classical method of [`crate::rk4`],
+//! the Rosenbrock engine the linearly implicit method of
 //! [`crate::rosenbrock`]; all step through the one driver (module `driver`). Which engine runs is an
 //! [`EngineKind`], checked when the scenario is read.
 
@@ -17,6 +18,7 @@ use crate::driver::{Integrating, ModelSystem, drive, slip_floor, tolerances};
 use crate::excitation::Excitation;
 use crate::imex::ImexRungeKutta;
 use crate::method::{Method, MethodChoice, choose_method};
+use crate::rk4::ClassicalRungeKutta;
 use crate::rosenbrock::Rosenbrock;
 use crate::settings::{SimError, SimSettings, check_settings, sample_times};
 use crate::trajectory::{SolverStats, Trajectory};
@@ -157,17 +159,19 @@ impl AutoEngine {
         }
     }
 
-    /// The method this engine takes for `model` started at `x0`.
-    pub fn choice(&self, model: &Model, x0: &[f64]) -> MethodChoice {
-        choose_method(model, &self.slipping, x0)
+    /// The method this engine takes for `model` started at `x0` and
+    /// integrated to `rtol`.
+    pub fn choice(&self, model: &Model, x0: &[f64], rtol: f64) -> MethodChoice {
+        choose_method(model, &self.slipping, x0, rtol)
     }
 
-    /// The engine of the method it takes for `model` started at `x0`: for
-    /// many runs of one model, the choice made once.
-    pub fn resolved(&self, model: &Model, x0: &[f64]) -> Box<dyn Engine> {
-        match self.choice(model, x0).method {
+    /// The engine of the method it takes for `model` started at `x0` and
+    /// integrated to `rtol`: for many runs of one model, the choice made once.
+    pub fn resolved(&self, model: &Model, x0: &[f64], rtol: f64) -> Box<dyn Engine> {
+        match self.choice(model, x0, rtol).method {
             Method::DormandPrince => Box::new(NativeEngine),
             Method::ImexBristles => Box::new(ImexEngine),
+            Method::Classical => Box::new(Rk4Engine),
         }
     }
 }
@@ -185,7 +189,7 @@ impl Engine for AutoEngine {
         settings: &SimSettings,
         progress: &mut Progress<'_>,
     ) -> Result<Trajectory, SimError> {
-        self.resolved(model, x0)
+        self.resolved(model, x0, settings.rtol)
             .simulate(model, x0, excitation, settings, progress)
     }
 }
@@ -251,6 +255,38 @@ impl Engine for Dop853Engine {
             settings,
             progress,
             |system| Dop853::new(system, 0.0, x0, tol),
+        )
+    }
+}
+
+/// The classical fourth-order Runge-Kutta method with a free third-order
+/// estimate ([`crate::rk4`]): for loose tolerances where lightly damped
+/// stiff modes, not accuracy, hold the explicit step.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Rk4Engine;
+
+impl Engine for Rk4Engine {
+    fn kind(&self) -> EngineKind {
+        EngineKind::Rk4
+    }
+
+    fn simulate(
+        &self,
+        model: &Model,
+        x0: &[f64],
+        excitation: &dyn Excitation,
+        settings: &SimSettings,
+        progress: &mut Progress<'_>,
+    ) -> Result<Trajectory, SimError> {
+        let tol = settings_tolerances(model, settings);
+        integrate(
+            self.kind(),
+            model,
+            x0,
+            excitation,
+            settings,
+            progress,
+            |system| ClassicalRungeKutta::new(system, 0.0, x0, tol),
         )
     }
 }

@@ -447,34 +447,56 @@ impl ImexRungeKutta {
     /// The state at `t` inside the last accepted step: cubic Hermite from
     /// the values and derivatives at both ends.
     pub fn interpolate(&self, t: f64, out: &mut [f64]) {
-        let h = self.h_previous;
-        let s = if h > 0.0 {
-            ((t - self.t_previous) / h).clamp(0.0, 1.0)
-        } else {
-            1.0
-        };
-        let (h00, h10, h01, h11) = (
-            (1.0 + 2.0 * s) * (1.0 - s) * (1.0 - s),
-            s * (1.0 - s) * (1.0 - s),
-            s * s * (3.0 - 2.0 * s),
-            s * s * (s - 1.0),
-        );
         let f_end = if self.end_in_first_stage {
             &self.k[0]
         } else {
             &self.f_end
         };
-        for m in 0..self.n {
-            out[m] = h00 * self.x_previous[m]
-                + h * h10 * self.f_previous[m]
-                + h01 * self.x[m]
-                + h * h11 * f_end[m];
-        }
+        hermite(
+            self.t_previous,
+            self.h_previous,
+            &self.x_previous,
+            &self.f_previous,
+            &self.x,
+            f_end,
+            t,
+            &mut out[..self.n],
+        );
     }
 
     /// Start time of the last accepted step.
     pub fn previous_time(&self) -> f64 {
         self.t_previous
+    }
+}
+
+/// The cubic Hermite interpolant at `t` of a step of size `h` from
+/// `(t0, x0)` with derivative `f0` to `x1` with derivative `f1`, into `out`
+/// (its length is the number of states).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn hermite(
+    t0: f64,
+    h: f64,
+    x0: &[f64],
+    f0: &[f64],
+    x1: &[f64],
+    f1: &[f64],
+    t: f64,
+    out: &mut [f64],
+) {
+    let s = if h > 0.0 {
+        ((t - t0) / h).clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
+    let (h00, h10, h01, h11) = (
+        (1.0 + 2.0 * s) * (1.0 - s) * (1.0 - s),
+        s * (1.0 - s) * (1.0 - s),
+        s * s * (3.0 - 2.0 * s),
+        s * s * (s - 1.0),
+    );
+    for m in 0..out.len() {
+        out[m] = h00 * x0[m] + h * h10 * f0[m] + h01 * x1[m] + h * h11 * f1[m];
     }
 }
 

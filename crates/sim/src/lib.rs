@@ -7,10 +7,13 @@
 //!
 //! - **Engines** ([`engine_for`] picks the scenario's): [`AutoEngine`], the
 //!   default, which takes the implicit-explicit method where the bristles
-//!   bound the explicit step and Dormand-Prince elsewhere; [`NativeEngine`], an
+//!   bound the explicit step and an explicit method elsewhere; [`NativeEngine`], an
 //!   error-controlled Dormand-Prince 5(4) with dense output; [`ImexEngine`],
 //!   the additive Runge-Kutta pair with the bristle states solved exactly at
-//!   each stage; [`Dop853Engine`], the explicit eighth-order pair, opt-in for
+//!   each stage; [`Rk4Engine`], the classical fourth-order method with a
+//!   free third-order estimate, which `auto` takes at loose tolerances where
+//!   lightly damped stiff modes hold the explicit step;
+//!   [`Dop853Engine`], the explicit eighth-order pair, opt-in for
 //!   tight tolerances (on the shipped stages the bristle and bushing
 //!   stiffness hold it near its stability limit; it pays only at rtol 1e-10
 //!   on the small ones); [`RosenbrockEngine`], linearly implicit with the model's exact Jacobian,
@@ -58,6 +61,7 @@ pub mod matread;
 pub mod method;
 pub mod metrics;
 pub mod rapier_engine;
+pub mod rk4;
 pub mod rosenbrock;
 pub mod run;
 pub mod select;
@@ -70,8 +74,8 @@ pub mod trajectory;
 pub use cosim::{HeldInputs, Stepper, StepperTolerances};
 pub use dopri::{Checkpoint, StepCounts};
 pub use engine::{
-    AutoEngine, Dop853Engine, Engine, ImexEngine, NativeEngine, Progress, RosenbrockEngine,
-    no_progress,
+    AutoEngine, Dop853Engine, Engine, ImexEngine, NativeEngine, Progress, Rk4Engine,
+    RosenbrockEngine, no_progress,
 };
 pub use excitation::{Excitation, ScenarioExcitation};
 pub use metrics::{SignalSummary, WindowStats, summarize, window_stats};

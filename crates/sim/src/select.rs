@@ -3,7 +3,9 @@
 
 use fistage_model::{EngineKind, Scenario};
 
-use crate::engine::{AutoEngine, Dop853Engine, Engine, ImexEngine, NativeEngine, RosenbrockEngine};
+use crate::engine::{
+    AutoEngine, Dop853Engine, Engine, ImexEngine, NativeEngine, Rk4Engine, RosenbrockEngine,
+};
 use crate::rapier_engine::RapierEngine;
 
 /// The engine of a kind with default settings (the rapier engine without colliders).
@@ -14,6 +16,7 @@ pub fn engine_of_kind(kind: EngineKind) -> Box<dyn Engine> {
         EngineKind::Rosenbrock => Box::new(RosenbrockEngine),
         EngineKind::Imex => Box::new(ImexEngine),
         EngineKind::Dop853 => Box::new(Dop853Engine),
+        EngineKind::Rk4 => Box::new(Rk4Engine),
         EngineKind::Rapier => Box::new(RapierEngine::default()),
     }
 }
