@@ -1,6 +1,6 @@
 //! `fistage bench --rhs`: the cost of one right-hand side of the assembled
-//! model against a hand-written kernel of the same equations, side by side
-//! in one run, on one-axis stages of one, four and eight bearings (each with
+//! model (its machine code, and its generic evaluation) against a
+//! hand-written kernel of the same equations, side by side in one run, on one-axis stages of one, four and eight bearings (each with
 //! its own isolator and LuGre friction: 5, 14 and 26 states) and, model
 //! only, on the six-degree-of-freedom four-bearing stage. The hand kernel is
 //! paper Eq. 2 written out bearing by bearing for that layout, with nothing
@@ -99,8 +99,9 @@ const CASES: [&str; 4] = [
     "scenarios/coupling/symmetric_fig05b.toml",
 ];
 
-/// Random states near the slipping motion of the stage (positions of
-/// micrometres, velocities of mm/s, bristles within their steady deflection).
+/// Random states near the slipping motion of the stage about its zero
+/// configuration (positions of micrometres, velocities of mm/s, bristles
+/// within their steady deflection, small rotations).
 fn states(loaded: &Loaded, count: usize) -> Vec<Vec<f64>> {
     let mut seed = 0x5EED_u64;
     let mut uniform = move || {
@@ -110,8 +111,14 @@ fn states(loaded: &Loaded, count: usize) -> Vec<Vec<f64>> {
         ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
     };
     let nominal = &loaded.model.layout().nominal;
+    let zero = loaded.model.zero_state();
     (0..count)
-        .map(|_| nominal.iter().map(|scale| scale * uniform()).collect())
+        .map(|_| {
+            zero.iter()
+                .zip(nominal)
+                .map(|(zero, scale)| zero + scale * uniform())
+                .collect()
+        })
         .collect()
 }
 
@@ -135,9 +142,9 @@ pub fn rhs_table(repeat: usize) -> anyhow::Result<()> {
         "Cost of one right-hand side (median of {repeat} rounds of 200 000 evaluations at random states near slipping, platform 20 mm/s; release build):\n"
     );
     println!(
-        "| scenario | states | evaluation path | model ns/RHS | hand kernel ns/RHS | model / hand | model ns per state |"
+        "| scenario | states | evaluation path | generic ns/RHS | compiled ns/RHS | hand kernel ns/RHS | compiled / hand | compiled ns per state |"
     );
-    println!("|---|---:|---|---:|---:|---:|---:|");
+    println!("|---|---:|---|---:|---:|---:|---:|---:|");
     for case in CASES {
         let path = PathBuf::from(case);
         let loaded = fistage_model::load(Path::new(&path))?;
@@ -169,6 +176,12 @@ pub fn rhs_table(repeat: usize) -> anyhow::Result<()> {
         }
         let calls = 200_000;
         let mut k = 0;
+        let generic = model.interpreted();
+        let generic_ns = time_per_call(repeat, calls, || {
+            k = (k + 1) % states.len();
+            generic.rhs(black_box(&states[k]), &inputs, &mut dx, &mut ws);
+            black_box(&dx);
+        });
         let model_ns = time_per_call(repeat, calls, || {
             k = (k + 1) % states.len();
             model.rhs(black_box(&states[k]), &inputs, &mut dx, &mut ws);
@@ -186,7 +199,7 @@ pub fn rhs_table(repeat: usize) -> anyhow::Result<()> {
             None => ("-".into(), "-".into()),
         };
         println!(
-            "| `{case}` | {n} | {:?} | {model_ns:.1} | {hand_cell} | {ratio_cell} | {:.2} |",
+            "| `{case}` | {n} | {:?} | {generic_ns:.1} | {model_ns:.1} | {hand_cell} | {ratio_cell} | {:.2} |",
             model.evaluation_path(),
             model_ns / n as f64
         );
