@@ -427,6 +427,10 @@ impl Instance {
                     t: self.start_time,
                     x: x0,
                 });
+                // The importer's integrator asks for the derivatives many
+                // times: the right-hand side as machine code (a model that
+                // does not compile is evaluated generically).
+                let _ = self.model.native(fistage_model::native::Function::Rhs);
                 self.phase = Phase::EventMode;
             }
         }

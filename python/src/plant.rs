@@ -23,6 +23,9 @@ impl Plant {
     pub fn new(loaded: Loaded) -> Result<Self, fistage_model::LoadError> {
         let start = fistage_sim::initial_state(&loaded.model, &loaded.scenario)?;
         let excitation = ScenarioExcitation::from_scenario(&loaded.scenario);
+        // An integrator calls the plant many times: its right-hand side as
+        // machine code (a model that does not compile is evaluated generically).
+        let _ = loaded.model.native(fistage_model::native::Function::Rhs);
         Ok(Self {
             loaded,
             excitation,

@@ -124,12 +124,13 @@ impl Model {
 
     /// State derivative `dx = f(x, u)`. `x` and `dx` have [`Model::n_states`] entries.
     /// The evaluation depends on the structure (see [`EvaluationPath`]) and
-    /// runs as machine code where it compiles ([`Model::native`]);
+    /// runs as machine code once that is compiled ([`Model::native`]: the
+    /// engines ask for it when a run is long enough to pay for it);
     /// [`Model::rhs_general`] is the general path every model can take.
     #[inline]
     pub fn rhs(&self, x: &[f64], inputs: &Inputs, dx: &mut [f64], ws: &mut Workspace) {
         let inputs = inputs.values();
-        if let Ok(native) = self.native(Function::Rhs)
+        if let Some(native) = self.compiled(Function::Rhs)
             && native.rhs(x, &inputs, dx).is_ok()
         {
             return;
@@ -142,12 +143,24 @@ impl Model {
     /// every evaluation runs the generic code ([`Model::rhs_of`],
     /// [`Model::rhs_implicit_of`]). Both give the same numbers.
     pub fn native(&self, function: Function) -> Result<&Native, &NotCompiled> {
-        let slot = match function {
+        self.native_slot(function)
+            .get_or_init(|| crate::native::compile(self, function))
+            .as_ref()
+    }
+
+    /// A function of the model as machine code if it has been compiled
+    /// already (compiling takes about a millisecond per hundred operations:
+    /// worth it for a run, not for one evaluation).
+    #[inline]
+    pub fn compiled(&self, function: Function) -> Option<&Native> {
+        self.native_slot(function).get()?.as_ref().ok()
+    }
+
+    fn native_slot(&self, function: Function) -> &OnceLock<Result<Native, NotCompiled>> {
+        match function {
             Function::Rhs => &self.native[0],
             Function::ImplicitStage => &self.native[1],
-        };
-        slot.get_or_init(|| crate::native::compile(self, function))
-            .as_ref()
+        }
     }
 
     /// The same model with nothing compiled: every evaluation runs the

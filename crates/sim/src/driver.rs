@@ -28,10 +28,10 @@ pub(crate) struct ModelSystem<'a> {
     workspace: &'a mut Workspace,
     /// The bristle states (implicit in the implicit-explicit integrator).
     bristles: Vec<usize>,
-    /// The right-hand side as machine code, where the model compiles.
-    native: Option<&'a Native>,
-    /// The implicit bristle stage as machine code, compiled on first use.
-    native_implicit: Option<Option<&'a Native>>,
+    /// The right-hand side as machine code, once the run has asked for it.
+    native: Tier<'a>,
+    /// The implicit bristle stage as machine code, likewise.
+    native_implicit: Tier<'a>,
 }
 
 impl<'a> ModelSystem<'a> {
@@ -48,8 +48,8 @@ impl<'a> ModelSystem<'a> {
                 .then(|| excitation.inputs(0.0).values()),
             workspace,
             bristles: model.bristle_states(),
-            native: model.native(Function::Rhs).ok(),
-            native_implicit: None,
+            native: Tier::new(model, Function::Rhs),
+            native_implicit: Tier::new(model, Function::ImplicitStage),
         }
     }
 
@@ -58,6 +58,60 @@ impl<'a> ModelSystem<'a> {
         match &self.constant_inputs {
             Some(inputs) => *inputs,
             None => self.excitation.inputs(t).values(),
+        }
+    }
+}
+
+/// Evaluations a run makes with the generic code before it compiles the
+/// machine code: about the evaluations that compiling costs (a millisecond
+/// or so per hundred operations against one or two nanoseconds per
+/// operation evaluated generically), so a short run does not pay for code it
+/// would hardly use, and a long one loses at most that much.
+const EVALUATIONS_BEFORE_COMPILING: u32 = 10_000;
+
+/// Where a run stands with one compiled function of its model.
+struct Tier<'a> {
+    function: Function,
+    state: TierState<'a>,
+}
+
+enum TierState<'a> {
+    /// Generic evaluation, this many more times before compiling.
+    Generic(u32),
+    /// The machine code.
+    Compiled(&'a Native),
+    /// The model does not compile (the generic code stays).
+    Unavailable,
+}
+
+impl<'a> Tier<'a> {
+    /// The compiled function if the model has it already, else a countdown.
+    fn new(model: &'a Model, function: Function) -> Self {
+        let state = match model.compiled(function) {
+            Some(native) => TierState::Compiled(native),
+            None => TierState::Generic(EVALUATIONS_BEFORE_COMPILING),
+        };
+        Self { function, state }
+    }
+
+    /// The compiled function for the next evaluation, compiling it when
+    /// the countdown runs out; `None`: evaluate generically.
+    #[inline]
+    fn next(&mut self, model: &'a Model) -> Option<&'a Native> {
+        match &mut self.state {
+            TierState::Compiled(native) => Some(native),
+            TierState::Unavailable => None,
+            TierState::Generic(0) => {
+                self.state = match model.native(self.function) {
+                    Ok(native) => TierState::Compiled(native),
+                    Err(_) => TierState::Unavailable,
+                };
+                None
+            }
+            TierState::Generic(left) => {
+                *left -= 1;
+                None
+            }
         }
     }
 }
@@ -79,7 +133,7 @@ impl OdeSystem for ModelSystem<'_> {
     #[inline]
     fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
         let inputs = self.inputs(t);
-        if let Some(native) = self.native
+        if let Some(native) = self.native.next(self.model)
             && native.rhs(x, &inputs, dx).is_ok()
         {
             return;
@@ -96,11 +150,7 @@ impl SplitSystem for ModelSystem<'_> {
     #[inline]
     fn rhs_implicit(&mut self, t: f64, x: &mut [f64], step: f64, dx: &mut [f64]) {
         let inputs = self.inputs(t);
-        let model = self.model;
-        let native = *self
-            .native_implicit
-            .get_or_insert_with(|| model.native(Function::ImplicitStage).ok());
-        if let Some(native) = native
+        if let Some(native) = self.native_implicit.next(self.model)
             && native.implicit_stage(x, &inputs, step, dx).is_ok()
         {
             return;

@@ -279,6 +279,9 @@ impl<'a> Session<'a> {
         settings: &'a SimSettings,
     ) -> Result<Self, String> {
         let n = model.n_states();
+        // The machine code the native engines run (a model that does not
+        // compile is evaluated generically by both).
+        let _ = model.native(fistage_model::native::Function::Rhs);
         let plant = Box::new(Plant {
             model,
             excitation,
