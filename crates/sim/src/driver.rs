@@ -32,6 +32,8 @@ pub(crate) struct ModelSystem<'a> {
     native: Tier<'a>,
     /// The implicit bristle stage as machine code, likewise.
     native_implicit: Tier<'a>,
+    /// Generic evaluations left before the run compiles what it uses.
+    countdown: u32,
 }
 
 impl<'a> ModelSystem<'a> {
@@ -50,6 +52,7 @@ impl<'a> ModelSystem<'a> {
             bristles: model.bristle_states(),
             native: Tier::new(model, Function::Rhs),
             native_implicit: Tier::new(model, Function::ImplicitStage),
+            countdown: EVALUATIONS_BEFORE_COMPILING,
         }
     }
 
@@ -76,8 +79,8 @@ struct Tier<'a> {
 }
 
 enum TierState<'a> {
-    /// Generic evaluation, this many more times before compiling.
-    Generic(u32),
+    /// Generic evaluation until the run has made enough evaluations.
+    Generic,
     /// The machine code.
     Compiled(&'a Native),
     /// The model does not compile (the generic code stays).
@@ -85,32 +88,33 @@ enum TierState<'a> {
 }
 
 impl<'a> Tier<'a> {
-    /// The compiled function if the model has it already, else a countdown.
+    /// The compiled function if the model has it already.
     fn new(model: &'a Model, function: Function) -> Self {
         let state = match model.compiled(function) {
             Some(native) => TierState::Compiled(native),
-            None => TierState::Generic(EVALUATIONS_BEFORE_COMPILING),
+            None => TierState::Generic,
         };
         Self { function, state }
     }
 
-    /// The compiled function for the next evaluation, compiling it when
-    /// the countdown runs out; `None`: evaluate generically.
+    /// The compiled function for the next evaluation, compiled now if the
+    /// run's countdown of generic evaluations has run out; `None`: evaluate
+    /// generically (and count).
     #[inline]
-    fn next(&mut self, model: &'a Model) -> Option<&'a Native> {
-        match &mut self.state {
+    fn next(&mut self, model: &'a Model, countdown: &mut u32) -> Option<&'a Native> {
+        match self.state {
             TierState::Compiled(native) => Some(native),
             TierState::Unavailable => None,
-            TierState::Generic(0) => {
+            TierState::Generic if *countdown > 0 => {
+                *countdown -= 1;
+                None
+            }
+            TierState::Generic => {
                 self.state = match model.native(self.function) {
                     Ok(native) => TierState::Compiled(native),
                     Err(_) => TierState::Unavailable,
                 };
-                None
-            }
-            TierState::Generic(left) => {
-                *left -= 1;
-                None
+                self.next(model, countdown)
             }
         }
     }
@@ -133,7 +137,7 @@ impl OdeSystem for ModelSystem<'_> {
     #[inline]
     fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
         let inputs = self.inputs(t);
-        if let Some(native) = self.native.next(self.model)
+        if let Some(native) = self.native.next(self.model, &mut self.countdown)
             && native.rhs(x, &inputs, dx).is_ok()
         {
             return;
@@ -150,7 +154,7 @@ impl SplitSystem for ModelSystem<'_> {
     #[inline]
     fn rhs_implicit(&mut self, t: f64, x: &mut [f64], step: f64, dx: &mut [f64]) {
         let inputs = self.inputs(t);
-        if let Some(native) = self.native_implicit.next(self.model)
+        if let Some(native) = self.native_implicit.next(self.model, &mut self.countdown)
             && native.implicit_stage(x, &inputs, step, dx).is_ok()
         {
             return;
