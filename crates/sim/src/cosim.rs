@@ -113,7 +113,8 @@ impl Stepper {
         let t = &self.tolerances;
         let tolerances = tolerances(model, t.rtol, t.atol_scale, t.max_step);
         let floor = slip_floor(model, &tolerances);
-        let mut system = ModelSystem::new(model, excitation, workspace);
+        let mut system = ModelSystem::new(model, excitation, workspace)
+            .after(self.checkpoint.counts.rhs_evaluations);
         let mut integrator = if self.checkpoint.h > 0.0 {
             DormandPrince::resume(&mut system, &self.checkpoint, tolerances)
         } else {
@@ -206,6 +207,34 @@ mod tests {
             worst = worst.max((stepper.state()[index] - reference).abs());
         }
         assert!(worst < 1e-8, "table position differs by {worst:e} m");
+    }
+
+    /// Communication steps of a few evaluations each add up to a run that
+    /// compiles its model's machine code.
+    #[test]
+    fn short_communication_steps_add_up_to_a_compiled_run() {
+        use fistage_model::native::Function;
+        let loaded = fig05b();
+        let model = &loaded.model;
+        let scenario = &loaded.scenario;
+        let x0 = crate::run::initial_state(model, scenario).expect("initial state");
+        let held = HeldInputs {
+            profile: scenario.reference.clone(),
+            held: Inputs {
+                platform_velocity: scenario.platform_velocity,
+                ..Inputs::default()
+            },
+        };
+        let mut stepper = Stepper::new(0.0, x0, tolerances(1e-9));
+        let mut ws = model.workspace();
+        for k in 1..=500 {
+            stepper
+                .advance(model, &held, k as f64 * 1e-3, &mut ws)
+                .expect("advance");
+        }
+        let evaluations = stepper.checkpoint().counts.rhs_evaluations;
+        assert!(evaluations > 20_000, "{evaluations}");
+        assert!(model.compiled(Function::Rhs).is_some());
     }
 
     /// Restoring a checkpoint and advancing again repeats the trajectory bit for bit.

@@ -56,6 +56,15 @@ impl<'a> ModelSystem<'a> {
         }
     }
 
+    /// The same system for a run that has made `evaluations` already (a
+    /// co-simulation's earlier communication steps): its countdown to
+    /// compiling goes on from there.
+    pub(crate) fn after(mut self, evaluations: u64) -> Self {
+        let made = u32::try_from(evaluations).unwrap_or(u32::MAX);
+        self.countdown = self.countdown.saturating_sub(made);
+        self
+    }
+
     #[inline]
     fn inputs(&self, t: f64) -> InputValues<f64> {
         match &self.constant_inputs {
