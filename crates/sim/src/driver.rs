@@ -81,10 +81,17 @@ impl<'a> ModelSystem<'a> {
 /// would hardly use, and a long one loses at most that much.
 const EVALUATIONS_BEFORE_COMPILING: u32 = 10_000;
 
+/// Evaluations on which a compiled function may find a branch going the
+/// other way (and leave the evaluation to the generic code) before a run
+/// stops trying it: a stage that keeps its bushings beyond the recorded
+/// rotation range would otherwise pay for both.
+const BAILS_BEFORE_GIVING_UP: u32 = 64;
+
 /// Where a run stands with one compiled function of its model.
 struct Tier<'a> {
     function: Function,
     state: TierState<'a>,
+    bails: u32,
 }
 
 enum TierState<'a> {
@@ -103,7 +110,20 @@ impl<'a> Tier<'a> {
             Some(native) => TierState::Compiled(native),
             None => TierState::Generic,
         };
-        Self { function, state }
+        Self {
+            function,
+            state,
+            bails: 0,
+        }
+    }
+
+    /// The compiled function gave up on an evaluation; after
+    /// [`BAILS_BEFORE_GIVING_UP`] of them the run evaluates generically.
+    fn bailed(&mut self) {
+        self.bails += 1;
+        if self.bails >= BAILS_BEFORE_GIVING_UP {
+            self.state = TierState::Unavailable;
+        }
     }
 
     /// The compiled function for the next evaluation, compiled now if the
@@ -146,10 +166,11 @@ impl OdeSystem for ModelSystem<'_> {
     #[inline]
     fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
         let inputs = self.inputs(t);
-        if let Some(native) = self.native.next(self.model, &mut self.countdown)
-            && native.rhs(x, &inputs, dx).is_ok()
-        {
-            return;
+        if let Some(native) = self.native.next(self.model, &mut self.countdown) {
+            if native.rhs(x, &inputs, dx).is_ok() {
+                return;
+            }
+            self.native.bailed();
         }
         self.model.rhs_of(x, &inputs, dx, self.workspace);
     }
@@ -163,10 +184,11 @@ impl SplitSystem for ModelSystem<'_> {
     #[inline]
     fn rhs_implicit(&mut self, t: f64, x: &mut [f64], step: f64, dx: &mut [f64]) {
         let inputs = self.inputs(t);
-        if let Some(native) = self.native_implicit.next(self.model, &mut self.countdown)
-            && native.implicit_stage(x, &inputs, step, dx).is_ok()
-        {
-            return;
+        if let Some(native) = self.native_implicit.next(self.model, &mut self.countdown) {
+            if native.implicit_stage(x, &inputs, step, dx).is_ok() {
+                return;
+            }
+            self.native_implicit.bailed();
         }
         self.model
             .rhs_implicit_bristles(x, &inputs, step, dx, self.workspace);
@@ -416,5 +438,40 @@ impl Pace {
         self.since_time = t;
         self.since_steps = steps;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::excitation::ScenarioExcitation;
+
+    /// A stage turned beyond the recorded rotation range: the compiled
+    /// right-hand side gives up on every evaluation, the generic code gives
+    /// the numbers, and after a few such evaluations the run stops trying.
+    #[test]
+    fn a_run_stops_trying_a_compiled_function_that_keeps_giving_up() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let loaded = fistage_model::load(&root.join("scenarios/coupling/friction20_traverse.toml"))
+            .expect("loads");
+        let model = &loaded.model;
+        model.native(Function::Rhs).expect("compiles");
+        let excitation = ScenarioExcitation::from_scenario(&loaded.scenario);
+        let mut ws = model.workspace();
+        let mut system = ModelSystem::new(model, &excitation, &mut ws);
+        assert!(matches!(system.native.state, TierState::Compiled(_)));
+        let mut x = model.zero_state();
+        let qw = model.layout().index("table.qw").expect("quaternion");
+        x[qw] = 0.05f64.cos();
+        x[qw + 3] = 0.05f64.sin();
+        let n = model.n_states();
+        let (mut dx, mut expected) = (vec![0.0; n], vec![0.0; n]);
+        for _ in 0..BAILS_BEFORE_GIVING_UP {
+            system.rhs(0.1, &x, &mut dx);
+        }
+        assert!(matches!(system.native.state, TierState::Unavailable));
+        let inputs = excitation.inputs(0.1).values();
+        model.rhs_of(&x, &inputs, &mut expected, &mut model.workspace());
+        assert_eq!(dx, expected);
     }
 }
