@@ -481,6 +481,31 @@ fn evaluation_paths_follow_the_structure() {
     );
     let pendulum = model_from(CART_PENDULUM, "robot = \"x\"\nduration = 1\n");
     assert_eq!(pendulum.evaluation_path(), EvaluationPath::General);
+    // The general path compiles too, and its machine code gives its numbers.
+    let native = pendulum
+        .native(fistage_model::native::Function::Rhs)
+        .expect("the general path compiles");
+    let mut rng = SplitMix(11);
+    let inputs = fistage_model::InputValues {
+        reference_position: 0.0,
+        reference_velocity: 0.0,
+        servo_force: 0.3,
+        platform_velocity: 0.0,
+    };
+    let n = pendulum.n_states();
+    let mut ws = pendulum.workspace();
+    for _ in 0..50 {
+        let x: Vec<f64> = pendulum
+            .zero_state()
+            .iter()
+            .map(|zero| zero + rng.range(-0.01, 0.01))
+            .collect();
+        let (mut compiled, mut generic) = (vec![0.0; n], vec![0.0; n]);
+        pendulum.rhs_of(&x, &inputs, &mut generic, &mut ws);
+        if native.rhs(&x, &inputs, &mut compiled).is_ok() {
+            assert_eq!(compiled, generic);
+        }
+    }
     let wheel = r#"<robot name="wheel"><link name="world"/>
       <link name="wheel"><inertial><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.02"/></inertial></link>
       <joint name="spin" type="continuous"><parent link="world"/><child link="wheel"/><axis xyz="0 0 1"/></joint>

@@ -842,7 +842,11 @@ fn cholesky_solve<S: Scalar>(a: &mut [S], b: &mut [S]) -> bool {
         for p in 0..j {
             diagonal -= a[j * n + p] * a[j * n + p];
         }
-        if diagonal.value() <= 0.0 || !diagonal.value().is_finite() {
+        // Positive and finite (compared, not read out, so that a compiled
+        // evaluation checks the same branch).
+        let positive = diagonal.compare_value(0.0) == Some(std::cmp::Ordering::Greater)
+            && diagonal.compare_value(f64::INFINITY) == Some(std::cmp::Ordering::Less);
+        if !positive {
             return false;
         }
         let diagonal = diagonal.sqrt();
