@@ -10,6 +10,8 @@
 //! to and `n` the shape exponent (1 in Dahl's own model). fistage uses it as a
 //! compensator's model of friction (paper Section 2.2), not as a contact law.
 
+use std::cmp::Ordering;
+
 use crate::rule::Rule;
 use crate::scalar::Scalar;
 
@@ -95,11 +97,14 @@ impl DahlParams {
     /// The force rate `F'` at velocity `v` and force `force`.
     #[inline]
     pub fn force_rate_of<S: Scalar>(&self, v: S, force: S) -> S {
-        let direction = if v.value() < 0.0 { -S::one() } else { S::one() };
+        // The sign of the motion, written without a branch so that compiled
+        // code follows a reversal (at v = -0 it is -1: the rate is a zero of
+        // one sign or the other either way).
+        let direction = S::one().copysign(v);
         let gap = S::one() - force * S::constant(1.0 / self.f_c) * direction;
         let shape = if self.exponent == 1.0 {
             gap
-        } else if gap.value() == 0.0 {
+        } else if gap.compare_value(0.0) == Some(Ordering::Equal) {
             S::zero()
         } else {
             gap.abs().powf(S::constant(self.exponent)) * gap.signum()

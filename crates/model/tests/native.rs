@@ -89,12 +89,6 @@ fn compiled_functions_give_the_evaluations_numbers_on_every_shipped_stage() {
             let native = match model.native(function) {
                 Ok(native) => native,
                 Err(NotCompiled::NoBristles) if function == Function::ImplicitStage => continue,
-                Err(NotCompiled::Unsupported(why)) => {
-                    // The Dahl compensator's direction is the one evaluation
-                    // shipped that reads a value out as a number.
-                    assert!(why.contains("dahl.rs"), "{name}: {why}");
-                    continue;
-                }
                 Err(other) => panic!("{name}: {function:?} not compiled: {other}"),
             };
             compiled += 1;

@@ -17,8 +17,9 @@
 //! or below 0.01 rad, say), the compiled function checks that the branch
 //! still goes the recorded way and otherwise gives up ([`Bail`]); the
 //! caller then evaluates as before. An evaluation that does what compiled
-//! code cannot repeat (reads a value out as a number, as the Dahl model's
-//! direction does) is not compiled at all ([`NotCompiled`]).
+//! code cannot repeat (reads a value out as a number instead of comparing
+//! it, as the rotation logarithm does within a few degrees of half a turn)
+//! is not compiled at all ([`NotCompiled`]).
 //!
 //! Two functions are compiled: the right-hand side, and the implicit stage
 //! of the bristle states ([`crate::Model::rhs_implicit_bristles`]) when the
@@ -392,9 +393,11 @@ mod tests {
         // operations (the hand-written kernel of bench --rhs has about 25).
         let operations = tape.operations();
         assert!((20..60).contains(&operations), "{operations}");
+        // The Dahl compensator's direction is a sign taken without a branch:
+        // a reversal of the motion does not make the code give up.
         let dahl = &shipped("scenarios/paper/fig03a_ff_fi.toml").model;
         let (x, inputs) = recording_point(dahl, 1);
-        let refused = trace(dahl, &x, &inputs, Function::Rhs).expect_err("not compiled");
-        assert!(refused.to_string().contains("reads a value"), "{refused}");
+        let tape = trace(dahl, &x, &inputs, Function::Rhs).expect("records");
+        assert!(tape.guards.len() <= 1, "{:?}", tape.guards);
     }
 }
