@@ -16,11 +16,12 @@
 //! - **Evaluation.** [`Model::rhs`] gives the state derivative with a
 //!   per-thread [`Workspace`]; the evaluation is chosen once, when the model
 //!   is built, from its structure ([`EvaluationPath`]), and the exact
-//!   Jacobian ([`Model::jacobian`]) differentiates that same code. On
-//!   first use the evaluation is recorded and compiled to machine code
-//!   ([`native`], [`Model::native`]): straight-line arithmetic with the
-//!   model's numbers in the instructions, checked to give the same numbers,
-//!   which `Model::rhs` and every engine then run.
+//!   Jacobian ([`Model::jacobian`]) differentiates that same code.
+//!   [`Model::native`] records the evaluation and compiles it to machine
+//!   code ([`native`]): straight-line arithmetic with the model's numbers in
+//!   the instructions, checked to give the same numbers, which `Model::rhs`
+//!   and every engine then run (a run compiles after its first 10 000
+//!   evaluations).
 //! - **The servo.** A PID on a sensor and an actuator, with optional
 //!   feedforward friction compensation (a LuGre or Dahl model driven by the
 //!   reference, simulated with its own states, through a simulated bearing

@@ -30,7 +30,8 @@ pub struct Model {
     /// The robot file after the scenario's overrides: what the parameter table reads.
     pub(crate) robot: RobotSpec,
     /// The right-hand side and the implicit bristle stage as machine code,
-    /// each compiled on its first use (shared by the model's clones).
+    /// each compiled when [`Model::native`] is first called for it (shared
+    /// by the model's clones).
     pub(crate) native: Arc<[OnceLock<Result<Native, NotCompiled>>; 2]>,
 }
 
@@ -139,7 +140,7 @@ impl Model {
     }
 
     /// A function of the model as machine code ([`crate::native`]),
-    /// compiled on the first call; or why it is not compiled, in which case
+    /// compiled on this call if it was not yet; or why it is not compiled, in which case
     /// every evaluation runs the generic code ([`Model::rhs_of`],
     /// [`Model::rhs_implicit_of`]). Both give the same numbers.
     pub fn native(&self, function: Function) -> Result<&Native, &NotCompiled> {
