@@ -1,9 +1,12 @@
 //! The step-size controller of the embedded Runge-Kutta pairs (Dormand-Prince
-//! 5(4), the implicit-explicit pair, DOP853): a PI controller on the
-//! logarithm of the scaled error norm (Gustafsson), with the gains of
-//! Hairer's DOPRI5 for the fifth-order pairs and of his DOP853 for the
-//! eighth-order one, so the way from one step's error to the next step's
-//! size is written once.
+//! 5(4), the implicit-explicit pair, DOP853, the classical method): a PI
+//! controller on the logarithm of the scaled error norm (Gustafsson), with
+//! the gains of Hairer's DOPRI5 for the fifth-order pairs and of his DOP853
+//! for the eighth-order one, and the loop that takes one accepted step with
+//! it (`accepted_step`), so the way from one step's error to the next
+//! step's size is written once.
+
+use crate::dopri::{StepFailure, Tolerances};
 
 /// Controller state: the logarithm of the last accepted step's error norm.
 #[derive(Debug, Clone, Copy)]
@@ -128,6 +131,84 @@ impl PiController {
             }
         } else {
             Judgement::Reject { factor: 0.1 }
+        }
+    }
+}
+
+/// What the step loop reads and writes of a pair between its trials.
+pub(crate) struct StepControl<'a> {
+    /// Current time.
+    pub t: f64,
+    /// Suggested next step.
+    pub h: &'a mut f64,
+    pub tol: &'a Tolerances,
+    pub controller: &'a mut PiController,
+    /// The pair's count of rejected trials.
+    pub rejected: &'a mut u64,
+    /// The first state that was not finite in the last trial.
+    pub non_finite: Option<usize>,
+}
+
+/// The [`StepControl`] of a pair whose step-size state has the usual field
+/// names (`t`, `h`, `tol`, `controller`, `counts`, `non_finite`).
+macro_rules! step_control {
+    ($pair:expr) => {
+        $crate::controller::StepControl {
+            t: $pair.t,
+            h: &mut $pair.h,
+            tol: &$pair.tol,
+            controller: &mut $pair.controller,
+            rejected: &mut $pair.counts.rejected,
+            non_finite: $pair.non_finite,
+        }
+    };
+}
+pub(crate) use step_control;
+
+/// An embedded Runge-Kutta pair, as the shared step loop drives it.
+pub(crate) trait EmbeddedPair<S: ?Sized> {
+    /// The pair's step-size state.
+    fn control(&mut self) -> StepControl<'_>;
+    /// One trial step of size `h`: the mean square of its scaled error
+    /// estimate (infinite where not finite).
+    fn trial(&mut self, system: &mut S, h: f64) -> f64;
+    /// Moves to the trial's new point at `t_new`.
+    fn advance(&mut self, system: &mut S, h: f64, t_new: f64);
+}
+
+/// Takes one accepted step of `pair`, not beyond `t_stop` (landing on it
+/// exactly, not on t + (t_stop - t)). Rejected trials are retried with a
+/// smaller step; a non-finite error estimate counts as a rejection.
+pub(crate) fn accepted_step<S: ?Sized, P: EmbeddedPair<S>>(
+    pair: &mut P,
+    system: &mut S,
+    t_stop: f64,
+) -> Result<(), StepFailure> {
+    let mut rejected = false;
+    loop {
+        let control = pair.control();
+        let t = control.t;
+        let Some((h, lands)) = control.tol.next_step(t, *control.h, t_stop) else {
+            return Err(StepFailure::StepSizeUnderflow {
+                t,
+                h: control.h.min(control.tol.max_step),
+                non_finite: control.non_finite,
+            });
+        };
+        let mean_square = pair.trial(system, h);
+        let control = pair.control();
+        match control.controller.judge(mean_square, rejected) {
+            Judgement::Accept { factor } => {
+                pair.advance(system, h, if lands { t_stop } else { t + h });
+                let control = pair.control();
+                *control.h = Tolerances::suggestion_after(*control.h, h * factor, lands);
+                return Ok(());
+            }
+            Judgement::Reject { factor } => {
+                *control.rejected += 1;
+                rejected = true;
+                *control.h = h * factor;
+            }
         }
     }
 }

@@ -167,6 +167,17 @@ mod tests {
         }
     }
 
+    /// The scenario's reference and platform velocity, no servo force.
+    fn scenario_inputs(scenario: &fistage_model::Scenario) -> HeldInputs {
+        HeldInputs {
+            profile: scenario.reference.clone(),
+            held: Inputs {
+                platform_velocity: scenario.platform_velocity,
+                ..Inputs::default()
+            },
+        }
+    }
+
     /// Stepping 1 ms at a time agrees with one continuous run sampled at the
     /// same points, within the tolerance (restarts change only round-off-level
     /// error-control decisions).
@@ -184,13 +195,7 @@ mod tests {
         let continuous = NativeEngine
             .simulate(model, &x0, &excitation, &settings, &mut crate::no_progress)
             .expect("continuous run");
-        let held = HeldInputs {
-            profile: scenario.reference.clone(),
-            held: Inputs {
-                platform_velocity: scenario.platform_velocity,
-                ..Inputs::default()
-            },
-        };
+        let held = scenario_inputs(scenario);
         let mut stepper = Stepper::new(0.0, x0, tolerances(1e-9));
         let mut ws = model.workspace();
         let index = model.layout().index("table_x.q").expect("table state");
@@ -218,13 +223,7 @@ mod tests {
         let model = &loaded.model;
         let scenario = &loaded.scenario;
         let x0 = crate::run::initial_state(model, scenario).expect("initial state");
-        let held = HeldInputs {
-            profile: scenario.reference.clone(),
-            held: Inputs {
-                platform_velocity: scenario.platform_velocity,
-                ..Inputs::default()
-            },
-        };
+        let held = scenario_inputs(scenario);
         let mut stepper = Stepper::new(0.0, x0, tolerances(1e-9));
         let mut ws = model.workspace();
         for k in 1..=500 {
@@ -243,13 +242,7 @@ mod tests {
         let loaded = fig05b();
         let model = &loaded.model;
         let x0 = crate::run::initial_state(model, &loaded.scenario).expect("initial state");
-        let held = HeldInputs {
-            profile: loaded.scenario.reference.clone(),
-            held: Inputs {
-                platform_velocity: loaded.scenario.platform_velocity,
-                ..Inputs::default()
-            },
-        };
+        let held = scenario_inputs(&loaded.scenario);
         let mut ws = model.workspace();
         let mut stepper = Stepper::new(0.0, x0, tolerances(1e-7));
         stepper

@@ -11,7 +11,9 @@
 
 mod tableau;
 
-use crate::controller::{Gains, Judgement, PiController};
+use crate::controller::{
+    EmbeddedPair, Gains, PiController, StepControl, accepted_step, step_control,
+};
 use crate::dopri::{OdeSystem, StepCounts, StepFailure, Tolerances, starting_step};
 use crate::sized::{state_count, with_state_count};
 use tableau::{ALL, COUPLING, DENSE, ERROR_FIFTH, ERROR_THIRD, NODES, STEPPING, WEIGHTS};
@@ -126,40 +128,10 @@ impl Dop853 {
         system: &mut S,
         t_stop: f64,
     ) -> Result<(), StepFailure> {
-        let mut rejected = false;
-        loop {
-            let Some((h, lands)) = self.tol.next_step(self.t, self.h, t_stop) else {
-                return Err(StepFailure::StepSizeUnderflow {
-                    t: self.t,
-                    h: self.h.min(self.tol.max_step),
-                    non_finite: self.non_finite,
-                });
-            };
-            let mean_square = self.attempt(system, h);
-            match self.controller.judge(mean_square, rejected) {
-                Judgement::Accept { factor } => {
-                    self.accept(system, h, if lands { t_stop } else { self.t + h });
-                    self.h = Tolerances::suggestion_after(self.h, h * factor, lands);
-                    return Ok(());
-                }
-                Judgement::Reject { factor } => {
-                    self.counts.rejected += 1;
-                    rejected = true;
-                    self.h = h * factor;
-                }
-            }
-        }
+        accepted_step(self, system, t_stop)
     }
 
-    /// One trial step of size h into `x_new`; the square of Hairer's blended
-    /// error norm, `h |e5|^2 / sqrt(n (|e5|^2 + 0.01 |e3|^2))`. Small systems
-    /// take a copy of the arithmetic whose length is a compile-time
-    /// constant, as in [`crate::dopri`].
-    fn attempt<S: OdeSystem + ?Sized>(&mut self, system: &mut S, h: f64) -> f64 {
-        with_state_count!(self.n, self.attempt_sized(system, h))
-    }
-
-    /// [`Self::attempt`] over `N` states (`N` = 0, `DYNAMIC`: `self.n`).
+    /// The trial step ([`EmbeddedPair::trial`]) over `N` states (`N` = 0, `DYNAMIC`: `self.n`).
     #[inline(always)]
     fn attempt_sized<const N: usize, S: OdeSystem + ?Sized>(
         &mut self,
@@ -208,20 +180,6 @@ impl Dop853 {
             self.non_finite = (0..n).find(|&m| !x_new[m].is_finite());
             f64::INFINITY
         }
-    }
-
-    /// Moves to the new point and evaluates f there (the next first stage).
-    fn accept<S: OdeSystem + ?Sized>(&mut self, system: &mut S, h: f64, t_new: f64) {
-        self.t_previous = self.t;
-        self.h_previous = h;
-        self.t = t_new;
-        // The step's start stays in `x_new` for the continuous extension.
-        std::mem::swap(&mut self.x, &mut self.x_new);
-        system.rhs(self.t, &self.x, &mut self.k[STEPPING]);
-        self.k.swap(0, STEPPING);
-        self.counts.rhs_evaluations += 1;
-        self.counts.steps += 1;
-        self.dense_formed = false;
     }
 
     /// Forms the continuous extension of the last accepted step: its three
@@ -303,6 +261,34 @@ fn combine(out: &mut [f64], x: &[f64], h: f64, a: &[f64], k: &[Vec<f64>]) {
     }
     for (o, x) in out.iter_mut().zip(x) {
         *o = x + h * *o;
+    }
+}
+
+impl<S: OdeSystem + ?Sized> EmbeddedPair<S> for Dop853 {
+    fn control(&mut self) -> StepControl<'_> {
+        step_control!(self)
+    }
+
+    /// One trial step of size h into `x_new`; the square of Hairer's blended
+    /// error norm, `h |e5|^2 / sqrt(n (|e5|^2 + 0.01 |e3|^2))`. Small systems
+    /// take a copy of the arithmetic whose length is a compile-time
+    /// constant, as in [`crate::dopri`].
+    fn trial(&mut self, system: &mut S, h: f64) -> f64 {
+        with_state_count!(self.n, self.attempt_sized(system, h))
+    }
+
+    /// Moves to the new point and evaluates f there (the next first stage).
+    fn advance(&mut self, system: &mut S, h: f64, t_new: f64) {
+        self.t_previous = self.t;
+        self.h_previous = h;
+        self.t = t_new;
+        // The step's start stays in `x_new` for the continuous extension.
+        std::mem::swap(&mut self.x, &mut self.x_new);
+        system.rhs(self.t, &self.x, &mut self.k[STEPPING]);
+        self.k.swap(0, STEPPING);
+        self.counts.rhs_evaluations += 1;
+        self.counts.steps += 1;
+        self.dense_formed = false;
     }
 }
 

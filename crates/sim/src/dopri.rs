@@ -3,7 +3,7 @@
 //! extension for dense output. Independent of fistage models: it integrates any
 //! [`OdeSystem`].
 
-use crate::controller::{Judgement, PiController};
+use crate::controller::{EmbeddedPair, PiController, StepControl, accepted_step, step_control};
 use crate::sized::{state_count, with_state_count};
 
 /// A system `x' = f(t, x)`.
@@ -298,44 +298,10 @@ impl DormandPrince {
         system: &mut S,
         t_stop: f64,
     ) -> Result<(), StepFailure> {
-        let mut rejected = false;
-        loop {
-            let Some((h, lands)) = self.tol.next_step(self.t, self.h, t_stop) else {
-                return Err(StepFailure::StepSizeUnderflow {
-                    t: self.t,
-                    h: self.h.min(self.tol.max_step),
-                    non_finite: self.non_finite,
-                });
-            };
-            let mean_square = self.attempt(system, h);
-            match self.controller.judge(mean_square, rejected) {
-                Judgement::Accept { factor } => {
-                    self.accept(h);
-                    if lands {
-                        // Land on the stop time exactly, not on t + (t_stop - t).
-                        self.t = t_stop;
-                    }
-                    self.h = Tolerances::suggestion_after(self.h, h * factor, lands);
-                    return Ok(());
-                }
-                Judgement::Reject { factor } => {
-                    self.counts.rejected += 1;
-                    rejected = true;
-                    self.h = h * factor;
-                }
-            }
-        }
+        accepted_step(self, system, t_stop)
     }
 
-    /// One trial step of size h; returns the mean square of the scaled
-    /// error estimate (the square of the error norm). Small systems
-    /// take a copy of the arithmetic whose length is a compile-time constant
-    /// (fully unrolled, no loop overhead); the operations are the same.
-    fn attempt<S: OdeSystem + ?Sized>(&mut self, system: &mut S, h: f64) -> f64 {
-        with_state_count!(self.n, self.attempt_sized(system, h))
-    }
-
-    /// [`Self::attempt`] over `N` states (`N` = 0, `DYNAMIC`: `self.n`).
+    /// The trial step ([`EmbeddedPair::trial`]) over `N` states (`N` = 0, `DYNAMIC`: `self.n`).
     #[inline(always)]
     fn attempt_sized<const N: usize, S: OdeSystem + ?Sized>(
         &mut self,
@@ -405,22 +371,6 @@ impl DormandPrince {
         }
     }
 
-    /// Advances to the new point. The dense output of the step is not
-    /// formed here but on demand in [`Self::interpolate`], from the stages
-    /// that stay in place until the next attempt: most steps hold no sample.
-    fn accept(&mut self, h: f64) {
-        self.t_previous = self.t;
-        self.h_previous = h;
-        self.t += h;
-        // The old state stays in `x_new` for the dense output.
-        std::mem::swap(&mut self.x, &mut self.x_new);
-        // FSAL: the last stage is the first of the next step; the old first
-        // stage moves to the last slot, where the dense output reads it.
-        self.k.swap(0, 6);
-        self.last_stage_slot = 0;
-        self.counts.steps += 1;
-    }
-
     /// State at time `t` inside the last accepted step, written into `out`:
     /// Hairer's fourth-order continuous extension.
     pub fn interpolate(&self, t: f64, out: &mut [f64]) {
@@ -452,13 +402,53 @@ impl DormandPrince {
     }
 }
 
+impl<S: OdeSystem + ?Sized> EmbeddedPair<S> for DormandPrince {
+    fn control(&mut self) -> StepControl<'_> {
+        step_control!(self)
+    }
+
+    /// One trial step of size h; returns the mean square of the scaled
+    /// error estimate (the square of the error norm). Small systems
+    /// take a copy of the arithmetic whose length is a compile-time constant
+    /// (fully unrolled, no loop overhead); the operations are the same.
+    fn trial(&mut self, system: &mut S, h: f64) -> f64 {
+        with_state_count!(self.n, self.attempt_sized(system, h))
+    }
+
+    /// Advances to the new point. The dense output of the step is not
+    /// formed here but on demand in [`Self::interpolate`], from the stages
+    /// that stay in place until the next attempt: most steps hold no sample.
+    fn advance(&mut self, _system: &mut S, h: f64, t_new: f64) {
+        self.t_previous = self.t;
+        self.h_previous = h;
+        self.t = t_new;
+        // The old state stays in `x_new` for the dense output.
+        std::mem::swap(&mut self.x, &mut self.x_new);
+        // FSAL: the last stage is the first of the next step; the old first
+        // stage moves to the last slot, where the dense output reads it.
+        self.k.swap(0, 6);
+        self.last_stage_slot = 0;
+        self.counts.steps += 1;
+    }
+}
+
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    /// Harmonic oscillator x'' = -w^2 x.
-    struct Oscillator {
-        w: f64,
+    /// Harmonic oscillator x'' = -w^2 x (also the classical method's test).
+    pub(crate) struct Oscillator {
+        pub(crate) w: f64,
+    }
+
+    /// The oscillator's tolerances: `rtol`, and `rtol` as the absolute one.
+    pub(crate) fn oscillator_tolerances(rtol: f64) -> Tolerances {
+        Tolerances {
+            rtol,
+            atol: vec![rtol; 2],
+            max_step: f64::INFINITY,
+            min_step_relative: 1e-14,
+        }
     }
 
     impl OdeSystem for Oscillator {
@@ -474,12 +464,7 @@ mod tests {
     fn run(rtol: f64) -> (f64, f64, StepCounts) {
         let w = 2.0 * std::f64::consts::PI;
         let mut system = Oscillator { w };
-        let tol = Tolerances {
-            rtol,
-            atol: vec![rtol; 2],
-            max_step: f64::INFINITY,
-            min_step_relative: 1e-14,
-        };
+        let tol = oscillator_tolerances(rtol);
         let mut dp = DormandPrince::new(&mut system, 0.0, &[1.0, 0.0], tol);
         let mut worst_dense = 0.0_f64;
         let mut out = [0.0; 2];
@@ -499,12 +484,7 @@ mod tests {
         let mut system = Oscillator {
             w: 2.0 * std::f64::consts::PI,
         };
-        let tol = Tolerances {
-            rtol: 1e-8,
-            atol: vec![1e-8; 2],
-            max_step: f64::INFINITY,
-            min_step_relative: 1e-14,
-        };
+        let tol = oscillator_tolerances(1e-8);
         let mut dp = DormandPrince::new(&mut system, 0.0, &[1.0, 0.0], tol);
         for _ in 0..5 {
             dp.step(&mut system, 3.0).unwrap();

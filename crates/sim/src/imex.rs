@@ -14,8 +14,9 @@
 //! evaluations per step (seven stages and the derivative at the new point,
 //! which is the next step's first stage and the dense output's right end).
 
-use crate::controller::{Judgement, PiController};
+use crate::controller::{EmbeddedPair, PiController, StepControl, accepted_step, step_control};
 use crate::dopri::{Checkpoint, OdeSystem, StepCounts, StepFailure, Tolerances, starting_step};
+use crate::hermite::HermiteStep;
 use crate::sized::{state_count, with_state_count};
 
 /// A system with some states treated implicitly.
@@ -208,15 +209,8 @@ pub struct ImexRungeKutta {
     k: [Vec<f64>; STAGES],
     stage: Vec<f64>,
     x_new: Vec<f64>,
-    /// Start of the last accepted step: state and derivative (dense output).
-    x_previous: Vec<f64>,
-    f_previous: Vec<f64>,
-    /// The derivative at the end of the last accepted step, when a restart
-    /// has replaced slot 0 of `k` by the derivative under the new inputs.
-    f_end: Vec<f64>,
-    end_in_first_stage: bool,
-    t_previous: f64,
-    h_previous: f64,
+    /// Dense output of the last accepted step.
+    dense: HermiteStep,
     controller: PiController,
     /// Counters.
     pub counts: StepCounts,
@@ -268,12 +262,7 @@ impl ImexRungeKutta {
             k: std::array::from_fn(|_| zeros()),
             stage: zeros(),
             x_new: zeros(),
-            x_previous: x0.to_vec(),
-            f_previous: zeros(),
-            f_end: zeros(),
-            end_in_first_stage: true,
-            t_previous: t0,
-            h_previous: 0.0,
+            dense: HermiteStep::new(t0, x0),
             controller: PiController::default(),
             counts: StepCounts::default(),
             non_finite: None,
@@ -306,10 +295,7 @@ impl ImexRungeKutta {
     /// Restarts at the current point after a discontinuity of the inputs.
     /// The dense output of the last step is kept.
     pub fn restart<S: SplitSystem + ?Sized>(&mut self, system: &mut S) {
-        if self.end_in_first_stage {
-            std::mem::swap(&mut self.f_end, &mut self.k[0]);
-            self.end_in_first_stage = false;
-        }
+        self.dense.keep_end(&mut self.k[0]);
         system.rhs(self.t, &self.x, &mut self.k[0]);
         self.counts.rhs_evaluations += 1;
         self.controller.reset();
@@ -321,39 +307,10 @@ impl ImexRungeKutta {
         system: &mut S,
         t_stop: f64,
     ) -> Result<(), StepFailure> {
-        let mut rejected = false;
-        loop {
-            let Some((h, lands)) = self.tol.next_step(self.t, self.h, t_stop) else {
-                return Err(StepFailure::StepSizeUnderflow {
-                    t: self.t,
-                    h: self.h.min(self.tol.max_step),
-                    non_finite: self.non_finite,
-                });
-            };
-            let mean_square = self.attempt(system, h);
-            match self.controller.judge(mean_square, rejected) {
-                Judgement::Accept { factor } => {
-                    self.accept(system, h, if lands { t_stop } else { self.t + h });
-                    self.h = Tolerances::suggestion_after(self.h, h * factor, lands);
-                    return Ok(());
-                }
-                Judgement::Reject { factor } => {
-                    self.counts.rejected += 1;
-                    rejected = true;
-                    self.h = h * factor;
-                }
-            }
-        }
+        accepted_step(self, system, t_stop)
     }
 
-    /// One trial step of size h into `x_new`; the mean square of the scaled
-    /// error estimate. Small systems take a copy of the arithmetic whose
-    /// length is a compile-time constant, as in [`crate::dopri`].
-    fn attempt<S: SplitSystem + ?Sized>(&mut self, system: &mut S, h: f64) -> f64 {
-        with_state_count!(self.n, self.attempt_sized(system, h))
-    }
-
-    /// [`Self::attempt`] over `N` states (`N` = 0, `DYNAMIC`: `self.n`).
+    /// The trial step ([`EmbeddedPair::trial`]) over `N` states (`N` = 0, `DYNAMIC`: `self.n`).
     #[inline(always)]
     fn attempt_sized<const N: usize, S: SplitSystem + ?Sized>(
         &mut self,
@@ -430,73 +387,16 @@ impl ImexRungeKutta {
         system.rhs_implicit(self.t + NODES[I] * h, stage, h * GAMMA, &mut rest[0][..n]);
     }
 
-    /// Moves to the new point and evaluates f there (the next first stage).
-    fn accept<S: SplitSystem + ?Sized>(&mut self, system: &mut S, h: f64, t_new: f64) {
-        std::mem::swap(&mut self.x_previous, &mut self.x);
-        std::mem::swap(&mut self.x, &mut self.x_new);
-        std::mem::swap(&mut self.f_previous, &mut self.k[0]);
-        self.t_previous = self.t;
-        self.h_previous = h;
-        self.t = t_new;
-        system.rhs(self.t, &self.x, &mut self.k[0]);
-        self.end_in_first_stage = true;
-        self.counts.rhs_evaluations += 1;
-        self.counts.steps += 1;
-    }
-
     /// The state at `t` inside the last accepted step: cubic Hermite from
     /// the values and derivatives at both ends.
     pub fn interpolate(&self, t: f64, out: &mut [f64]) {
-        let f_end = if self.end_in_first_stage {
-            &self.k[0]
-        } else {
-            &self.f_end
-        };
-        hermite(
-            self.t_previous,
-            self.h_previous,
-            &self.x_previous,
-            &self.f_previous,
-            &self.x,
-            f_end,
-            t,
-            &mut out[..self.n],
-        );
+        self.dense
+            .interpolate(&self.x, &self.k[0], t, &mut out[..self.n]);
     }
 
     /// Start time of the last accepted step.
     pub fn previous_time(&self) -> f64 {
-        self.t_previous
-    }
-}
-
-/// The cubic Hermite interpolant at `t` of a step of size `h` from
-/// `(t0, x0)` with derivative `f0` to `x1` with derivative `f1`, into `out`
-/// (its length is the number of states).
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn hermite(
-    t0: f64,
-    h: f64,
-    x0: &[f64],
-    f0: &[f64],
-    x1: &[f64],
-    f1: &[f64],
-    t: f64,
-    out: &mut [f64],
-) {
-    let s = if h > 0.0 {
-        ((t - t0) / h).clamp(0.0, 1.0)
-    } else {
-        1.0
-    };
-    let (h00, h10, h01, h11) = (
-        (1.0 + 2.0 * s) * (1.0 - s) * (1.0 - s),
-        s * (1.0 - s) * (1.0 - s),
-        s * s * (3.0 - 2.0 * s),
-        s * s * (s - 1.0),
-    );
-    for m in 0..out.len() {
-        out[m] = h00 * x0[m] + h * h10 * f0[m] + h01 * x1[m] + h * h11 * f1[m];
+        self.dense.start_time()
     }
 }
 
@@ -517,6 +417,29 @@ fn stage_entry<const I: usize>(
         }
     }
     (x + h * sum) + (h * row[I - 1]) * k[I - 1][m]
+}
+
+impl<S: SplitSystem + ?Sized> EmbeddedPair<S> for ImexRungeKutta {
+    fn control(&mut self) -> StepControl<'_> {
+        step_control!(self)
+    }
+
+    /// One trial step of size h into `x_new`; the mean square of the scaled
+    /// error estimate. Small systems take a copy of the arithmetic whose
+    /// length is a compile-time constant, as in [`crate::dopri`].
+    fn trial(&mut self, system: &mut S, h: f64) -> f64 {
+        with_state_count!(self.n, self.attempt_sized(system, h))
+    }
+
+    /// Moves to the new point and evaluates f there (the next first stage).
+    fn advance(&mut self, system: &mut S, h: f64, t_new: f64) {
+        self.dense.begin(self.t, h, &mut self.x, &mut self.k[0]);
+        std::mem::swap(&mut self.x, &mut self.x_new);
+        self.t = t_new;
+        system.rhs(self.t, &self.x, &mut self.k[0]);
+        self.counts.rhs_evaluations += 1;
+        self.counts.steps += 1;
+    }
 }
 
 #[cfg(test)]

@@ -54,6 +54,7 @@ pub mod dopri;
 mod driver;
 pub mod engine;
 pub mod excitation;
+mod hermite;
 pub mod imex;
 mod kinks;
 pub mod matfile;

@@ -15,8 +15,11 @@
 //! error estimates hold the step near `h |lambda| = 2`, where the classical
 //! method spends four evaluations a step against six.
 
-use crate::controller::{Gains, Judgement, PiController};
+use crate::controller::{
+    EmbeddedPair, Gains, PiController, StepControl, accepted_step, step_control,
+};
 use crate::dopri::{Checkpoint, OdeSystem, StepCounts, StepFailure, Tolerances, starting_step};
+use crate::hermite::HermiteStep;
 use crate::sized::{state_count, with_state_count};
 
 /// The integrator between steps.
@@ -34,15 +37,8 @@ pub struct ClassicalRungeKutta {
     k: [Vec<f64>; 5],
     stage: Vec<f64>,
     x_new: Vec<f64>,
-    /// Start of the last accepted step: state and derivative (dense output).
-    x_previous: Vec<f64>,
-    f_previous: Vec<f64>,
-    /// The derivative at the end of the last accepted step, once a restart
-    /// has put the derivative under the new inputs in slot 0.
-    f_end: Vec<f64>,
-    end_in_first_stage: bool,
-    t_previous: f64,
-    h_previous: f64,
+    /// Dense output of the last accepted step.
+    dense: HermiteStep,
     controller: PiController,
     /// Counters.
     pub counts: StepCounts,
@@ -86,12 +82,7 @@ impl ClassicalRungeKutta {
             k: std::array::from_fn(|_| zeros()),
             stage: zeros(),
             x_new: zeros(),
-            x_previous: x0.to_vec(),
-            f_previous: zeros(),
-            f_end: zeros(),
-            end_in_first_stage: true,
-            t_previous: t0,
-            h_previous: 0.0,
+            dense: HermiteStep::new(t0, x0),
             controller: PiController::with_gains(Gains::FOURTH_ORDER),
             counts: StepCounts::default(),
             non_finite: None,
@@ -124,10 +115,7 @@ impl ClassicalRungeKutta {
     /// Restarts at the current point after a discontinuity of the inputs.
     /// The dense output of the last step is kept.
     pub fn restart<S: OdeSystem + ?Sized>(&mut self, system: &mut S) {
-        if self.end_in_first_stage {
-            std::mem::swap(&mut self.f_end, &mut self.k[0]);
-            self.end_in_first_stage = false;
-        }
+        self.dense.keep_end(&mut self.k[0]);
         system.rhs(self.t, &self.x, &mut self.k[0]);
         self.counts.rhs_evaluations += 1;
         self.controller.reset();
@@ -139,39 +127,10 @@ impl ClassicalRungeKutta {
         system: &mut S,
         t_stop: f64,
     ) -> Result<(), StepFailure> {
-        let mut rejected = false;
-        loop {
-            let Some((h, lands)) = self.tol.next_step(self.t, self.h, t_stop) else {
-                return Err(StepFailure::StepSizeUnderflow {
-                    t: self.t,
-                    h: self.h.min(self.tol.max_step),
-                    non_finite: self.non_finite,
-                });
-            };
-            let mean_square = self.attempt(system, h);
-            match self.controller.judge(mean_square, rejected) {
-                Judgement::Accept { factor } => {
-                    self.accept(h, if lands { t_stop } else { self.t + h });
-                    self.h = Tolerances::suggestion_after(self.h, h * factor, lands);
-                    return Ok(());
-                }
-                Judgement::Reject { factor } => {
-                    self.counts.rejected += 1;
-                    rejected = true;
-                    self.h = h * factor;
-                }
-            }
-        }
+        accepted_step(self, system, t_stop)
     }
 
-    /// One trial step of size h into `x_new` (with f there in slot 4); the
-    /// mean square of the scaled error estimate. Small systems take a copy
-    /// whose length is a compile-time constant, as in [`crate::dopri`].
-    fn attempt<S: OdeSystem + ?Sized>(&mut self, system: &mut S, h: f64) -> f64 {
-        with_state_count!(self.n, self.attempt_sized(system, h))
-    }
-
-    /// [`Self::attempt`] over `N` states (`N` = 0, `DYNAMIC`: `self.n`).
+    /// The trial step ([`EmbeddedPair::trial`]) over `N` states (`N` = 0, `DYNAMIC`: `self.n`).
     #[inline(always)]
     fn attempt_sized<const N: usize, S: OdeSystem + ?Sized>(
         &mut self,
@@ -226,73 +185,55 @@ impl ClassicalRungeKutta {
         }
     }
 
-    /// Moves to the new point; f there (slot 4) becomes the first stage.
-    fn accept(&mut self, h: f64, t_new: f64) {
-        std::mem::swap(&mut self.x_previous, &mut self.x);
-        std::mem::swap(&mut self.x, &mut self.x_new);
-        std::mem::swap(&mut self.f_previous, &mut self.k[0]);
-        self.k.swap(0, 4);
-        self.t_previous = self.t;
-        self.h_previous = h;
-        self.t = t_new;
-        self.end_in_first_stage = true;
-        self.counts.steps += 1;
-    }
-
     /// The state at `t` inside the last accepted step: cubic Hermite from
     /// the values and derivatives at both ends.
     pub fn interpolate(&self, t: f64, out: &mut [f64]) {
-        let f_end = if self.end_in_first_stage {
-            &self.k[0]
-        } else {
-            &self.f_end
-        };
-        crate::imex::hermite(
-            self.t_previous,
-            self.h_previous,
-            &self.x_previous,
-            &self.f_previous,
-            &self.x,
-            f_end,
-            t,
-            &mut out[..self.n],
-        );
+        self.dense
+            .interpolate(&self.x, &self.k[0], t, &mut out[..self.n]);
+    }
+
+    /// Start time of the last accepted step.
+    pub fn previous_time(&self) -> f64 {
+        self.dense.start_time()
+    }
+}
+
+impl<S: OdeSystem + ?Sized> EmbeddedPair<S> for ClassicalRungeKutta {
+    fn control(&mut self) -> StepControl<'_> {
+        step_control!(self)
+    }
+
+    /// One trial step of size h into `x_new` (with f there in slot 4); the
+    /// mean square of the scaled error estimate. Small systems take a copy
+    /// whose length is a compile-time constant, as in [`crate::dopri`].
+    fn trial(&mut self, system: &mut S, h: f64) -> f64 {
+        with_state_count!(self.n, self.attempt_sized(system, h))
+    }
+
+    /// Moves to the new point; f there (slot 4) becomes the first stage.
+    fn advance(&mut self, _system: &mut S, h: f64, t_new: f64) {
+        self.dense.begin(self.t, h, &mut self.x, &mut self.k[0]);
+        std::mem::swap(&mut self.x, &mut self.x_new);
+        self.k.swap(0, 4);
+        self.t = t_new;
+        self.counts.steps += 1;
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// x'' = -w^2 x.
-    struct Oscillator {
-        w: f64,
-    }
-
-    impl OdeSystem for Oscillator {
-        fn dim(&self) -> usize {
-            2
-        }
-        fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) {
-            dx[0] = x[1];
-            dx[1] = -self.w * self.w * x[0];
-        }
-    }
+    use crate::dopri::tests::{Oscillator, oscillator_tolerances};
 
     fn run(rtol: f64) -> (f64, f64, StepCounts) {
         let w = 2.0 * std::f64::consts::PI;
         let mut system = Oscillator { w };
-        let tol = Tolerances {
-            rtol,
-            atol: vec![rtol; 2],
-            max_step: f64::INFINITY,
-            min_step_relative: 1e-14,
-        };
+        let tol = oscillator_tolerances(rtol);
         let mut rk = ClassicalRungeKutta::new(&mut system, 0.0, &[1.0, 0.0], tol);
         let (mut worst_dense, mut out) = (0.0_f64, [0.0; 2]);
         while rk.t < 3.0 {
             rk.step(&mut system, 3.0).expect("step");
-            let mid = 0.5 * (rk.t_previous + rk.t);
+            let mid = 0.5 * (rk.previous_time() + rk.t);
             rk.interpolate(mid, &mut out);
             worst_dense = worst_dense.max((out[0] - (w * mid).cos()).abs());
         }
