@@ -12,6 +12,10 @@ fistage=$(realpath "${1:?usage: sweep_array.sh PATH/TO/fistage}")
 repo=$(cd "$(dirname "$0")/../.." && pwd)
 shards=4
 
+if [ -n "${FISTAGE_HIDE_OPTIONAL:-}" ] && [ "${FISTAGE_HIDE_OPTIONAL}" != 0 ]; then
+    echo "Slurm hidden (FISTAGE_HIDE_OPTIONAL=$FISTAGE_HIDE_OPTIONAL)"
+    exit 77
+fi
 for tool in slurmctld slurmd sbatch squeue scontrol sinfo munged; do
     if ! command -v "$tool" >/dev/null; then
         echo "$tool not found (Debian's slurmctld, slurmd, slurm-client and munge; .ci/run installs them)"

@@ -28,14 +28,29 @@ pub fn library() -> PathBuf {
 
 /// Whether `.ci/run` asked for every system-dependent test to run
 /// (`FISTAGE_SYSTEM_TESTS=required`): then a missing tool fails the test.
+/// Hidden components ([`optional_hidden`]) are never required.
 pub fn system_tests_required() -> bool {
-    std::env::var("FISTAGE_SYSTEM_TESTS").is_ok_and(|v| v == "required")
+    optional_hidden().is_none()
+        && std::env::var("FISTAGE_SYSTEM_TESTS").is_ok_and(|v| v == "required")
+}
+
+/// Why the optional components (FMPy, fmutool) are not looked for:
+/// `FISTAGE_HIDE_OPTIONAL` set to anything but empty or `0`, as `.ci/run`
+/// sets it for one pass that runs every SKIPPED path of a bare machine.
+pub fn optional_hidden() -> Option<String> {
+    std::env::var("FISTAGE_HIDE_OPTIONAL")
+        .ok()
+        .filter(|value| !value.is_empty() && value != "0")
+        .map(|value| format!("hidden (FISTAGE_HIDE_OPTIONAL={value})"))
 }
 
 /// The python of the environment with FMPy: `FISTAGE_PYTHON` if set (as
 /// `.ci/run` sets it), else the environment `.ci/run` makes under `target/`.
 /// Tests never make it themselves.
 fn find_python() -> Option<PathBuf> {
+    if optional_hidden().is_some() {
+        return None;
+    }
     if let Some(python) = std::env::var_os("FISTAGE_PYTHON") {
         return Some(PathBuf::from(python));
     }
@@ -49,7 +64,10 @@ pub fn fmpy_available(test: &str) -> bool {
     if find_python().is_some() {
         return true;
     }
-    let why = "no FMPy environment (set FISTAGE_PYTHON, or run `bash ffi/tests/python/env.sh target/fmi-venv` as .ci/run does)";
+    let why = optional_hidden().map_or_else(
+        || "no FMPy environment (set FISTAGE_PYTHON, or run `bash ffi/tests/python/env.sh target/fmi-venv` as .ci/run does)".to_string(),
+        |why| format!("FMPy {why}"),
+    );
     assert!(!system_tests_required(), "{test}: {why}");
     println!("SKIPPED {test}: {why}");
     false

@@ -108,6 +108,9 @@ const LIBRARY_NAMES: [&str; 2] = ["libsundials_cvode.so.6", "libsundials_cvode.s
 impl Cvode {
     /// Opens SUNDIALS CVODE; the error says what was tried.
     pub fn open() -> Result<Self, String> {
+        if let Some(why) = super::hidden() {
+            return Err(format!("SUNDIALS CVODE {why}"));
+        }
         let mut failures = Vec::new();
         for name in LIBRARY_NAMES {
             // SAFETY: loading a shared library runs its initialisers; SUNDIALS'

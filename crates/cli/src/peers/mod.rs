@@ -8,6 +8,21 @@
 pub mod cvode;
 pub mod scipy;
 
+/// The environment variable that hides every optional component the bench
+/// can use (CVODE, a Python with fistage and SciPy, FMPy), as on a machine
+/// that has none of them: `.ci/run` sets it for one pass of the tests that
+/// use them, so that their SKIPPED paths are run too.
+pub const HIDE_OPTIONAL: &str = "FISTAGE_HIDE_OPTIONAL";
+
+/// Why an optional component is not looked for, when [`HIDE_OPTIONAL`] is
+/// set to anything but empty or `0`.
+pub fn hidden() -> Option<String> {
+    std::env::var(HIDE_OPTIONAL)
+        .ok()
+        .filter(|value| !value.is_empty() && value != "0")
+        .map(|value| format!("hidden ({HIDE_OPTIONAL}={value})"))
+}
+
 use fistage_model::Loaded;
 use fistage_sim::{ScenarioExcitation, SimSettings, StepCounts, Trajectory, initial_state};
 

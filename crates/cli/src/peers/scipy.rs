@@ -73,6 +73,9 @@ pub fn scipy_runs(
             reason,
         })])
     };
+    if let Some(why) = super::hidden() {
+        return skipped(format!("Python {why}"));
+    }
     let scenario = scenario
         .canonicalize()
         .with_context(|| format!("{}", scenario.display()))?;
