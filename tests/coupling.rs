@@ -5,7 +5,7 @@
 //! slipping equilibrium (a) the yaw that the table-x modes carry, as yaw times
 //! the 50 mm half bearing spacing over x, and (b) the share of table-x kinetic
 //! energy in the bearing-dominated modes (zero when the bearings are alike,
-//! because the anti-phase bearing modes then leave the table still along x). `cargo test --release --test coupling -- --nocapture` prints
+//! because the anti-phase bearing modes then leave the table still along x). `cargo test --release --test integration coupling -- --nocapture` prints
 //! the table quoted in the README.
 
 use fistage_analysis::modal_analysis;

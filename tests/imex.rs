@@ -6,7 +6,7 @@
 //! run is the chosen engine's, to the bit.
 
 use fistage_model::Loaded;
-use fistage_sim::method::Method;
+use fistage_sim::MethodKind as Method;
 use fistage_sim::{AutoEngine, RunOutput, initial_state};
 use fistage_tests::{deviation, load, run_with as with, stats};
 
@@ -51,7 +51,7 @@ fn bristle_bound_stages_take_imex_and_bushing_bound_ones_do_not() {
     };
     let picked = choice(&slipping);
     println!("fig06b_fi_vp50: {}", picked.reason);
-    assert_eq!(picked.method, Method::ImexBristles);
+    assert_eq!(picked.method, Method::Imex);
     let (explicit, imex) = (
         with(&slipping, "native", 1e-8),
         with(&slipping, "imex", 1e-8),

@@ -4,7 +4,7 @@
 //! rotating, general path), and fixed-joint merging.
 
 use fistage_model::{Inputs, assemble};
-use fistage_sim::{Engine, Excitation, NativeEngine, ScenarioExcitation};
+use fistage_sim::{AdaptiveEngine, Engine, Excitation, ScenarioExcitation};
 use fistage_tests::{CART_PENDULUM, SplitMix, load, model_from, settings, still};
 
 /// With no servo and no platform motion, kinetic + isolator + bristle energy
@@ -23,7 +23,7 @@ fn energy_never_increases_without_servo() {
         x0[index("table_x.q")] = rng.range(-2e-4, 2e-4);
         x0[index("table_x.v")] = rng.range(-0.08, 0.08);
         x0[index("bearing_x.v")] = rng.range(-0.08, 0.08);
-        let trajectory = NativeEngine
+        let trajectory = AdaptiveEngine::NATIVE
             .simulate(
                 &model,
                 &x0,
@@ -65,7 +65,7 @@ fn sliding_contact_reaches_eq30() {
             servo_force: 0.0,
         };
         let model = &loaded.model;
-        let trajectory = NativeEngine
+        let trajectory = AdaptiveEngine::NATIVE
             .simulate(
                 model,
                 &model.zero_state(),
@@ -133,7 +133,7 @@ fn two_level_prismatic_tree_matches_modal_solution() {
     let mut x0 = model.zero_state();
     x0[0] = x1_0;
     x0[1] = x2_0 - x1_0;
-    let trajectory = NativeEngine
+    let trajectory = AdaptiveEngine::NATIVE
         .simulate(
             &model,
             &x0,
@@ -169,7 +169,7 @@ fn pendulum_on_free_cart_matches_closed_form() {
     x0[1] = amplitude;
     // Start with zero horizontal momentum: the cart's offset does not matter.
     let t_end = 3.0;
-    let trajectory = NativeEngine
+    let trajectory = AdaptiveEngine::NATIVE
         .simulate(
             &model,
             &x0,

@@ -6,7 +6,7 @@
 
 use fistage_model::Loaded;
 use fistage_sim::{
-    Engine, NativeEngine, RapierEngine, RunOutput, ScenarioExcitation, SimSettings, run_scenario,
+    AdaptiveEngine, Engine, RapierEngine, RunOutput, ScenarioExcitation, SimSettings, run_scenario,
 };
 use fistage_tests::{CART_PENDULUM, FREE_BODY, load, model_from, run, settings, still};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
@@ -108,7 +108,7 @@ fn tumbling_body_conserves_momentum_and_agrees_with_native() {
         atol_scale: 1e-2,
         ..settings(1.0, 1e-2, 1e-11)
     };
-    let native = NativeEngine
+    let native = AdaptiveEngine::NATIVE
         .simulate(
             &model,
             &x0,
@@ -310,7 +310,7 @@ fn moving_free_root_with_a_jointed_child_follows_native() {
         atol_scale: 1e-2,
         ..settings(0.5, 1e-2, 1e-11)
     };
-    let native = NativeEngine
+    let native = AdaptiveEngine::NATIVE
         .simulate(
             &model,
             &x0,
@@ -368,7 +368,7 @@ fn off_grid_end_time_gets_its_own_sample() {
             &mut fistage_sim::no_progress,
         )
         .expect("rapier");
-    let native = NativeEngine
+    let native = AdaptiveEngine::NATIVE
         .simulate(
             model,
             &x0,

@@ -4,7 +4,7 @@
 //! (where lightly damped bushing modes set the step) and Dormand-Prince at
 //! tight ones, and there it takes fewer evaluations than Dormand-Prince.
 
-use fistage_sim::method::Method;
+use fistage_sim::MethodKind as Method;
 use fistage_sim::{AutoEngine, initial_state};
 use fistage_tests::{deviation, load, run_with};
 
@@ -67,5 +67,5 @@ fn auto_takes_it_at_loose_tolerances_where_the_bushings_set_the_step() {
     let slipping = load("scenarios/paper/fig06b_fi_vp50.toml");
     let x0 = initial_state(&slipping.model, &slipping.scenario).expect("start");
     let choice = AutoEngine::for_scenario(&slipping.scenario).choice(&slipping.model, &x0, 1e-5);
-    assert_eq!(choice.method, Method::ImexBristles);
+    assert_eq!(choice.method, Method::Imex);
 }

@@ -5,7 +5,7 @@
 
 use fistage_analysis::modal_analysis;
 use fistage_model::{EquilibriumKind, EvaluationPath, Inputs, Model, ReferenceSample, StateKind};
-use fistage_sim::{Engine, Excitation, NativeEngine, ScenarioExcitation, SimSettings};
+use fistage_sim::{AdaptiveEngine, Engine, Excitation, ScenarioExcitation, SimSettings};
 use fistage_tests::{CART_PENDULUM, FREE_BODY, SplitMix, load, model_from, run, still};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
@@ -172,7 +172,7 @@ fn torque_free_tumbling_conserves_momentum_and_energy() {
         max_step: None,
         max_steps: 10_000_000,
     };
-    let trajectory = NativeEngine
+    let trajectory = AdaptiveEngine::NATIVE
         .simulate(
             &model,
             &x0,

@@ -3,7 +3,7 @@
 //! headers that agree, function by function, with the official FMI 2.0 and
 //! 3.0 headers as FMPy ships them.
 
-mod support;
+use crate::support;
 
 use std::process::Command;
 

@@ -4,7 +4,7 @@
 //! give directional derivatives equal to finite differences. `fmutool -check`
 //! (fmu-manipulation-toolbox) finds nothing either.
 
-mod support;
+use crate::support;
 
 use std::collections::HashMap;
 use std::path::Path;

@@ -4,7 +4,7 @@
 //! Model Exchange: each one restores in a fresh instance of its interface
 //! and is byte for byte what the unit writes now. A change
 //! of the state format fails here until the seeds are written again with
-//! `FISTAGE_WRITE_FUZZ_SEEDS=1 cargo test -p fistage-fmi --test fuzz_seeds`.
+//! `FISTAGE_WRITE_FUZZ_SEEDS=1 cargo test -p fistage-fmi --test integration fuzz_seeds`.
 
 use std::path::{Path, PathBuf};
 

@@ -2,7 +2,7 @@
 //! information, small enough to mail (fig05b at most 3 MB), and a library
 //! that is not a fistage FMI shared object is refused.
 
-mod support;
+use crate::support;
 
 use std::io::Read;
 

@@ -2,7 +2,7 @@
 //! and FMU unpacking) runs the same FMU with the same communication steps
 //! as FMPy, and the outputs agree.
 
-mod support;
+use crate::support;
 
 use std::collections::HashMap;
 

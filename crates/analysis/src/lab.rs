@@ -65,7 +65,7 @@ use fistage_model::{
     ControllerSettings, Inputs, LugreParams, Model, ReferenceSample, RobotSpec, Scenario, assemble,
 };
 use fistage_sim::{
-    Engine, Excitation, NativeEngine, SignalTable, SimError, SimSettings, Trajectory,
+    AdaptiveEngine, Engine, Excitation, SignalTable, SimError, SimSettings, Trajectory,
 };
 
 use fistage_ident::synth::Rng;
@@ -223,7 +223,7 @@ pub(crate) fn simulate(
         max_step: None,
         max_steps: 200_000_000,
     };
-    NativeEngine.simulate(
+    AdaptiveEngine::NATIVE.simulate(
         model,
         x0,
         excitation,

@@ -24,7 +24,9 @@
 //! every interval restarts the clock.
 
 use fistage_model::{Loaded, Reference, StateKind};
-use fistage_sim::{Engine, NativeEngine, ScenarioExcitation, SimError, SimSettings, initial_state};
+use fistage_sim::{
+    AdaptiveEngine, Engine, ScenarioExcitation, SimError, SimSettings, initial_state,
+};
 use thiserror::Error;
 
 /// Settings of the estimate.
@@ -74,7 +76,7 @@ fn advance(loaded: &Loaded, x: &[f64], time: f64) -> Result<Vec<f64>, SimError> 
         sample_interval: time,
         ..SimSettings::from_scenario(&loaded.scenario)
     };
-    let trajectory = NativeEngine.simulate(
+    let trajectory = AdaptiveEngine::NATIVE.simulate(
         &loaded.model,
         x,
         &excitation,

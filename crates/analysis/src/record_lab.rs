@@ -17,10 +17,10 @@ use fistage_ident::record::{LabErrors, Record, Segment, StartState};
 use fistage_ident::{IdentError, Result};
 use std::path::Path;
 
+use fistage_model::ScenarioExcitation;
+use fistage_model::initial_state;
 use fistage_model::{Inputs, load};
 use fistage_sim::Excitation;
-use fistage_sim::excitation::ScenarioExcitation;
-use fistage_sim::run::initial_state;
 
 use crate::lab::{LabStage, Tolerance, simulate};
 

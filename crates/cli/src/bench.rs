@@ -700,7 +700,7 @@ fn engines_table(args: &BenchArgs, scenario: &Path) -> anyhow::Result<()> {
     use fistage_sim::rapier_engine::RapierEngine;
     let loaded = fistage_model::load(scenario)?;
     let signal = error_signal(args, &loaded)?;
-    let native = fistage_sim::NativeEngine;
+    let native = fistage_sim::AdaptiveEngine::NATIVE;
     eprintln!("reference run at rtol {:e} ...", args.reference_rtol);
     let reference = time_run(&loaded, &native, args.reference_rtol, 1)?;
     let simulated = loaded.scenario.duration;
@@ -787,8 +787,10 @@ fn stiffness_table(args: &BenchArgs) -> anyhow::Result<()> {
             robot,
             model,
         };
-        let engines: [&dyn Engine; 2] =
-            [&fistage_sim::NativeEngine, &fistage_sim::RosenbrockEngine];
+        let engines: [&dyn Engine; 2] = [
+            &fistage_sim::AdaptiveEngine::NATIVE,
+            &fistage_sim::AdaptiveEngine::new(fistage_sim::MethodKind::Rosenbrock),
+        ];
         for engine in engines {
             let timing = time_run(&loaded, engine, rtol, repeat)?;
             let excitation = ScenarioExcitation::from_scenario(&loaded.scenario);

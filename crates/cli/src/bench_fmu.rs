@@ -15,7 +15,7 @@ use fistage_fmi::exports::{
     fmi2Instantiate, fmi2SetupExperiment,
 };
 use fistage_fmi::package::{default_library_locations, write_resources};
-use fistage_sim::{Engine, NativeEngine, ScenarioExcitation, SimSettings, initial_state};
+use fistage_sim::{AdaptiveEngine, Engine, ScenarioExcitation, SimSettings, initial_state};
 
 /// A scratch folder removed when dropped.
 struct Scratch(PathBuf);
@@ -80,7 +80,7 @@ fn native_time(scenario: &Path, span: f64) -> anyhow::Result<f64> {
     let settings = SimSettings::from_scenario(&loaded.scenario);
     let excitation = ScenarioExcitation::from_scenario(&loaded.scenario);
     let start = Instant::now();
-    NativeEngine.simulate(
+    AdaptiveEngine::NATIVE.simulate(
         &loaded.model,
         &x0,
         &excitation,

@@ -66,7 +66,7 @@ fn print_method(loaded: &fistage_model::Loaded) -> anyhow::Result<()> {
     );
     println!(
         "engine: auto -> {} ({})",
-        choice.method.name(),
+        fistage_sim::engine_kind_of(choice.method).name(),
         choice.reason
     );
     Ok(())

@@ -359,7 +359,7 @@ fn write_record(path: &Path, record: &Record) -> Result<()> {
         .is_some_and(|e| e.eq_ignore_ascii_case("mat"));
     let result = if is_mat {
         let mut bytes = Vec::new();
-        fistage_sim::matfile::write_columns(
+        fistage_model::mat::write_columns(
             &mut bytes,
             &[
                 ("t_s", &record.time),

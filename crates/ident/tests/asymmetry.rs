@@ -3,7 +3,7 @@
 //! false-alarm rate the test allows). Both the F test (least squares) and the
 //! Wald test (robust fits) are exercised.
 
-mod common;
+use crate::common;
 
 use common::{parameter_sets, rel};
 use fistage_ident::stribeck::AsymmetryTestKind;

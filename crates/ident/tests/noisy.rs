@@ -2,7 +2,7 @@
 //! FRF noise on magnitude and phase): estimates within a few percent, the truth
 //! inside the 95% intervals, and interval coverage over many seeds close to 95%.
 
-mod common;
+use crate::common;
 
 use common::{frf_errors, parameter_sets, stribeck_errors, stribeck_truth};
 use fistage_ident::synth::{FrfSynth, StribeckSynth};

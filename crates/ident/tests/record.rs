@@ -133,7 +133,7 @@ fn bad_records_are_named_by_file_column_and_row() {
 fn mat_records_read_back() {
     let (record, _) = RecordSynth::new(small_stage(), 0.25).generate().unwrap();
     let mut bytes = Vec::new();
-    fistage_sim::matfile::write_columns(
+    fistage_model::mat::write_columns(
         &mut bytes,
         &[
             ("t_s", &record.time),

@@ -1,7 +1,7 @@
 //! Exact synthetic data (Table 1 and a small stage) are recovered to 1e-6
 //! relative, in memory and through lab-style CSV files in non-SI units.
 
-mod common;
+use crate::common;
 
 use common::{frf_errors, max, parameter_sets, stribeck_errors};
 use fistage_ident::synth::{FrfCsvLayout, FrfSynth, StribeckSynth, frf_csv, stribeck_csv, unit};

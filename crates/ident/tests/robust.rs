@@ -3,7 +3,7 @@
 //! each a convex program per v_s) recover the parameters, and the outliers are
 //! reported by line.
 
-mod common;
+use crate::common;
 
 use common::{max, parameter_sets, stribeck_errors};
 use fistage_ident::synth::StribeckSynth;

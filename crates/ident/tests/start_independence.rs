@@ -1,7 +1,7 @@
 //! The fits need no initial guess. A starting value (even an absurd one) only
 //! adds a candidate to the global search, so the answer is the same.
 
-mod common;
+use crate::common;
 
 use common::{parameter_sets, rel};
 use fistage_ident::synth::{FrfSynth, StribeckSynth};

@@ -6,10 +6,10 @@
 
 use fistage_model::{Inputs, Model, Reference, ReferenceSample, Workspace};
 
-use crate::dopri::{Checkpoint, DormandPrince};
 use crate::driver::{ModelSystem, drive, slip_floor, tolerances};
-use crate::excitation::Excitation;
 use crate::settings::SimError;
+use fistage_model::excitation::Excitation;
+use fistage_ode::{AdaptiveMethod, Checkpoint, DormandPrince, MethodState};
 
 /// The inputs over a communication step: the scenario's reference profile plus
 /// the held reference offset, the held servo force and platform velocity.
@@ -147,9 +147,9 @@ impl Stepper {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::{Engine, NativeEngine};
-    use crate::excitation::ScenarioExcitation;
+    use crate::engine::{AdaptiveEngine, Engine};
     use crate::settings::SimSettings;
+    use fistage_model::excitation::ScenarioExcitation;
     use fistage_model::load;
     use std::path::Path;
 
@@ -186,13 +186,13 @@ mod tests {
         let loaded = fig05b();
         let model = &loaded.model;
         let scenario = &loaded.scenario;
-        let x0 = crate::run::initial_state(model, scenario).expect("initial state");
+        let x0 = fistage_model::initial_state(model, scenario).expect("initial state");
         let mut settings = SimSettings::from_scenario(scenario);
         settings.t_end = 0.5;
         settings.sample_interval = 1e-3;
         settings.rtol = 1e-9;
         let excitation = ScenarioExcitation::from_scenario(scenario);
-        let continuous = NativeEngine
+        let continuous = AdaptiveEngine::NATIVE
             .simulate(model, &x0, &excitation, &settings, &mut crate::no_progress)
             .expect("continuous run");
         let held = scenario_inputs(scenario);
@@ -222,7 +222,7 @@ mod tests {
         let loaded = fig05b();
         let model = &loaded.model;
         let scenario = &loaded.scenario;
-        let x0 = crate::run::initial_state(model, scenario).expect("initial state");
+        let x0 = fistage_model::initial_state(model, scenario).expect("initial state");
         let held = scenario_inputs(scenario);
         let mut stepper = Stepper::new(0.0, x0, tolerances(1e-9));
         let mut ws = model.workspace();
@@ -241,7 +241,7 @@ mod tests {
     fn restore_repeats_bit_for_bit() {
         let loaded = fig05b();
         let model = &loaded.model;
-        let x0 = crate::run::initial_state(model, &loaded.scenario).expect("initial state");
+        let x0 = fistage_model::initial_state(model, &loaded.scenario).expect("initial state");
         let held = scenario_inputs(&loaded.scenario);
         let mut ws = model.workspace();
         let mut stepper = Stepper::new(0.0, x0, tolerances(1e-7));

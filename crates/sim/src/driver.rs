@@ -10,14 +10,13 @@ use fistage_model::native::{Function, Native};
 use fistage_model::{InputValues, Model, Workspace};
 use std::ops::ControlFlow;
 
-use crate::dop853::Dop853;
-use crate::dopri::{DormandPrince, OdeSystem, StepCounts, StepFailure, Tolerances};
-use crate::excitation::Excitation;
-use crate::imex::{ImexRungeKutta, SplitSystem};
+use fistage_ode::{
+    AdaptiveMethod, JacobianSystem, OdeSystem, SplitSystem, StepCounts, StepFailure, Tolerances,
+};
+
 use crate::kinks::KinkPredictor;
-use crate::rk4::ClassicalRungeKutta;
-use crate::rosenbrock::{JacobianSystem, Rosenbrock};
 use crate::settings::SimError;
+use fistage_model::excitation::Excitation;
 
 /// The model as an ODE `x' = f(t, x)` under an excitation.
 pub(crate) struct ModelSystem<'a> {
@@ -233,88 +232,6 @@ pub(crate) fn slip_floor(model: &Model, tolerances: &Tolerances) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-/// What the adaptive integrators share: step towards a stop time, restart
-/// after a discontinuity, interpolate inside the last step.
-pub(crate) trait Integrating {
-    /// Time reached.
-    fn time(&self) -> f64;
-    /// One step, not past `t_stop`.
-    fn advance(&mut self, system: &mut ModelSystem, t_stop: f64) -> Result<(), StepFailure>;
-    /// Forget the history: the inputs jumped.
-    fn restart(&mut self, system: &mut ModelSystem);
-    /// The solution at `t` inside the last step (an integrator may
-    /// evaluate the system to form it).
-    fn interpolate(&mut self, system: &mut ModelSystem, t: f64, out: &mut [f64]);
-    /// Steps, rejections and evaluations so far.
-    fn counts(&self) -> StepCounts;
-    /// The state at [`Integrating::time`].
-    fn state(&self) -> &[f64];
-    /// The size the next step will try.
-    fn proposed_step(&self) -> f64;
-}
-
-/// Both integrators have the same stepping interface over different system traits.
-macro_rules! integrating {
-    ($integrator:ty) => {
-        impl Integrating for $integrator {
-            fn time(&self) -> f64 {
-                self.t
-            }
-            fn advance(
-                &mut self,
-                system: &mut ModelSystem,
-                t_stop: f64,
-            ) -> Result<(), StepFailure> {
-                self.step(system, t_stop)
-            }
-            fn restart(&mut self, system: &mut ModelSystem) {
-                <$integrator>::restart(self, system);
-            }
-            fn interpolate(&mut self, _system: &mut ModelSystem, t: f64, out: &mut [f64]) {
-                <$integrator>::interpolate(self, t, out);
-            }
-            fn counts(&self) -> StepCounts {
-                self.counts
-            }
-            fn state(&self) -> &[f64] {
-                &self.x
-            }
-            fn proposed_step(&self) -> f64 {
-                self.h
-            }
-        }
-    };
-}
-
-integrating!(DormandPrince);
-integrating!(ImexRungeKutta);
-integrating!(Rosenbrock);
-integrating!(ClassicalRungeKutta);
-
-impl Integrating for Dop853 {
-    fn time(&self) -> f64 {
-        self.t
-    }
-    fn advance(&mut self, system: &mut ModelSystem, t_stop: f64) -> Result<(), StepFailure> {
-        self.step(system, t_stop)
-    }
-    fn restart(&mut self, system: &mut ModelSystem) {
-        Dop853::restart(self, system);
-    }
-    fn interpolate(&mut self, system: &mut ModelSystem, t: f64, out: &mut [f64]) {
-        Dop853::interpolate(self, system, t, out);
-    }
-    fn counts(&self) -> StepCounts {
-        self.counts
-    }
-    fn state(&self) -> &[f64] {
-        &self.x
-    }
-    fn proposed_step(&self) -> f64 {
-        self.h
-    }
-}
-
 /// The ends of the segments from `t0` to `t_end`: the breakpoints strictly
 /// inside, sorted and without repeats, then `t_end`.
 pub(crate) fn segment_ends(breakpoints: Vec<f64>, t0: f64, t_end: f64) -> Vec<f64> {
@@ -345,13 +262,13 @@ pub(crate) fn step_failure(model: &Model, failure: StepFailure) -> SimError {
 /// round-off), stops with [`SimError::TooManySteps`] once more than
 /// `max_steps` steps (accepted plus rejected) were taken in this call, and
 /// calls `after_step` after every accepted step.
-pub(crate) fn drive<I: Integrating>(
+pub(crate) fn drive<'a, I: AdaptiveMethod<ModelSystem<'a>>>(
     integrator: &mut I,
-    system: &mut ModelSystem,
+    system: &mut ModelSystem<'a>,
     t_end: f64,
     max_steps: u64,
     slip_floor: f64,
-    mut after_step: impl FnMut(&mut I, &mut ModelSystem) -> ControlFlow<()>,
+    mut after_step: impl FnMut(&mut I, &mut ModelSystem<'a>) -> ControlFlow<()>,
 ) -> Result<(), SimError> {
     let model = system.model;
     let ends = segment_ends(system.excitation.breakpoints(), integrator.time(), t_end);
@@ -376,7 +293,7 @@ pub(crate) fn drive<I: Integrating>(
                 .next_crossing(integrator.proposed_step())
                 .map_or(t_stop, |crossing| crossing.min(t_stop));
             integrator
-                .advance(system, target)
+                .step(system, target)
                 .map_err(|failure| step_failure(model, failure))?;
             let steps = used(integrator.counts());
             if steps > max_steps {
@@ -444,7 +361,7 @@ impl Pace {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::excitation::ScenarioExcitation;
+    use fistage_model::excitation::ScenarioExcitation;
 
     /// A stage turned beyond the recorded rotation range: the compiled
     /// right-hand side gives up on every evaluation, the generic code gives

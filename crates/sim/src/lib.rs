@@ -7,17 +7,18 @@
 //!
 //! - **Engines** ([`engine_for`] picks the scenario's): [`AutoEngine`], the
 //!   default, which takes the implicit-explicit method where the bristles
-//!   bound the explicit step and an explicit method elsewhere; [`NativeEngine`], an
-//!   error-controlled Dormand-Prince 5(4) with dense output; [`ImexEngine`],
-//!   the additive Runge-Kutta pair with the bristle states solved exactly at
-//!   each stage; [`Rk4Engine`], the classical fourth-order method with a
-//!   free third-order estimate, which `auto` takes at loose tolerances where
-//!   lightly damped stiff modes hold the explicit step;
-//!   [`Dop853Engine`], the explicit eighth-order pair, opt-in for
-//!   tight tolerances (on the shipped stages the bristle and bushing
-//!   stiffness hold it near its stability limit; it pays only at rtol 1e-10
-//!   on the small ones); [`RosenbrockEngine`], linearly implicit with the model's exact Jacobian,
-//!   for very stiff isolators; [`RapierEngine`], rapier3d-f64 under the
+//!   bound the explicit step and an explicit method elsewhere;
+//!   [`AdaptiveEngine`], any method of the ODE layer ([`fistage_ode`],
+//!   named by [`MethodKind`]): Dormand-Prince 5(4) (`native`), the additive
+//!   Runge-Kutta pair with the bristle states solved exactly at each stage
+//!   (`imex`), the classical fourth-order method with a free third-order
+//!   estimate (`rk4`, which `auto` takes at loose tolerances where lightly
+//!   damped stiff modes hold the explicit step), the explicit eighth-order
+//!   pair (`dop853`, opt-in for tight tolerances: on the shipped stages the
+//!   bristle and bushing stiffness hold it near its stability limit; it pays
+//!   only at rtol 1e-10 on the small ones) and ROS34PW2 (`rosenbrock`,
+//!   linearly implicit with the model's exact Jacobian, for very stiff
+//!   isolators); [`RapierEngine`], rapier3d-f64 under the
 //!   model's own force elements, for end stops and loose payloads. The
 //!   adaptive engines and the co-simulation [`Stepper`] share one driver:
 //!   segments between the inputs' discontinuities, steps that end on each
@@ -47,42 +48,30 @@
 
 #![warn(missing_docs)]
 
-pub mod controller;
+pub mod choice;
 pub mod cosim;
-pub mod dop853;
-pub mod dopri;
 mod driver;
 pub mod engine;
-pub mod excitation;
-mod hermite;
-pub mod imex;
 mod kinks;
-pub mod matfile;
-pub mod matread;
-pub mod method;
 pub mod metrics;
 pub mod rapier_engine;
-pub mod rk4;
-pub mod rosenbrock;
 pub mod run;
 pub mod select;
 pub mod settings;
-mod sized;
 pub mod summary;
 pub mod tracking;
 pub mod trajectory;
 
 pub use cosim::{HeldInputs, Stepper, StepperTolerances};
-pub use dopri::{Checkpoint, StepCounts};
-pub use engine::{
-    AutoEngine, Dop853Engine, Engine, ImexEngine, NativeEngine, Progress, Rk4Engine,
-    RosenbrockEngine, no_progress,
+pub use engine::{AdaptiveEngine, AutoEngine, Engine, Progress, no_progress};
+pub use fistage_model::excitation::{
+    Excitation, ScenarioExcitation, initial_state, initial_state_with,
 };
-pub use excitation::{Excitation, ScenarioExcitation};
+pub use fistage_ode::{Checkpoint, MethodKind, StepCounts};
 pub use metrics::{SignalSummary, WindowStats, summarize, window_stats};
 pub use rapier_engine::RapierEngine;
-pub use run::{RunError, RunOutput, initial_state, initial_state_with, run_scenario, validate};
-pub use select::{engine_for, engine_in, engine_of_kind};
+pub use run::{RunError, RunOutput, run_scenario, validate};
+pub use select::{engine_for, engine_in, engine_kind_of, engine_of_kind};
 pub use settings::{SimError, SimSettings, sample_times};
 pub use tracking::{TrackingMetrics, tracking_metrics};
 pub use trajectory::{ExtraSignal, SignalTable, SolverStats, Trajectory};

@@ -23,12 +23,12 @@ use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
 use rapier3d_f64::math::{Matrix, Pose, Rotation, Vector};
 use rapier3d_f64::prelude::*;
 
-use crate::dopri::StepCounts;
 use crate::engine::Engine;
-use crate::excitation::Excitation;
 use crate::settings::{SimError, SimSettings, sample_times};
 use crate::trajectory::{ExtraSignal, SolverStats, Trajectory};
 use fistage_model::eigen::spectral_radius;
+use fistage_model::excitation::Excitation;
+use fistage_ode::StepCounts;
 
 /// Default step as a fraction of the explicit stability limit 2 / |lambda|max.
 pub const DEFAULT_STEP_FRACTION: f64 = 0.05;

@@ -1,10 +1,10 @@
 //! One scenario run from a loaded study: initial state, engine choice,
 //! integration, output signals and steady-state statistics.
 
-use fistage_model::{EngineKind, EquilibriumKind, LoadError, Loaded, Model, Scenario, Start};
+use fistage_model::excitation::{ScenarioExcitation, initial_state};
+use fistage_model::{EngineKind, LoadError, Loaded, Model, Scenario};
 use thiserror::Error;
 
-use crate::excitation::{Excitation, ScenarioExcitation};
 use crate::metrics::{SignalSummary, summarize};
 use crate::select::engine_for;
 use crate::settings::{SimError, SimSettings};
@@ -37,46 +37,6 @@ pub struct RunOutput {
     pub summary: Vec<SignalSummary>,
     /// Tracking metrics of the servo (every signal is used, selected or not).
     pub tracking: Option<crate::tracking::TrackingMetrics>,
-}
-
-/// The scenario's starting state (`start`), with its `[initial]` entries applied.
-pub fn initial_state(model: &Model, scenario: &Scenario) -> Result<Vec<f64>, LoadError> {
-    let inputs = ScenarioExcitation::from_scenario(scenario).inputs(0.0);
-    initial_state_with(model, scenario, &inputs)
-}
-
-/// [`initial_state`] with the equilibrium (`start = "static"` or
-/// `"slipping"`) taken at the given inputs, e.g. those a co-simulation master
-/// set before initialisation.
-pub fn initial_state_with(
-    model: &Model,
-    scenario: &Scenario,
-    inputs: &fistage_model::Inputs,
-) -> Result<Vec<f64>, LoadError> {
-    let mut x = model.zero_state();
-    let kind = match scenario.start {
-        Start::Zero => None,
-        Start::Static => Some(EquilibriumKind::Sticking),
-        Start::Slipping => Some(EquilibriumKind::Slipping),
-    };
-    if let Some(kind) = kind {
-        x = model
-            .equilibrium(kind, inputs, &x)
-            .map_err(|e| scenario.error("start", e.to_string()))?;
-    }
-    for (name, value) in &scenario.initial {
-        let index = model.layout().index(name).ok_or_else(|| {
-            scenario.error(
-                format!("initial.{name}"),
-                format!(
-                    "no state of that name (states: {})",
-                    model.layout().names.join(", ")
-                ),
-            )
-        })?;
-        x[index] = *value;
-    }
-    Ok(x)
 }
 
 /// Every name in `output.signals` must be a signal of the model (checked

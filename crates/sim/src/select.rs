@@ -3,21 +3,32 @@
 
 use fistage_model::{EngineKind, Scenario};
 
-use crate::engine::{
-    AutoEngine, Dop853Engine, Engine, ImexEngine, NativeEngine, Rk4Engine, RosenbrockEngine,
-};
+use fistage_ode::MethodKind;
+
+use crate::engine::{AdaptiveEngine, AutoEngine, Engine};
 use crate::rapier_engine::RapierEngine;
 
 /// The engine of a kind with default settings (the rapier engine without colliders).
 pub fn engine_of_kind(kind: EngineKind) -> Box<dyn Engine> {
     match kind {
         EngineKind::Auto => Box::new(AutoEngine::default()),
-        EngineKind::Native => Box::new(NativeEngine),
-        EngineKind::Rosenbrock => Box::new(RosenbrockEngine),
-        EngineKind::Imex => Box::new(ImexEngine),
-        EngineKind::Dop853 => Box::new(Dop853Engine),
-        EngineKind::Rk4 => Box::new(Rk4Engine),
+        EngineKind::Native => Box::new(AdaptiveEngine::new(MethodKind::DormandPrince)),
+        EngineKind::Rosenbrock => Box::new(AdaptiveEngine::new(MethodKind::Rosenbrock)),
+        EngineKind::Imex => Box::new(AdaptiveEngine::new(MethodKind::Imex)),
+        EngineKind::Dop853 => Box::new(AdaptiveEngine::new(MethodKind::Dop853)),
+        EngineKind::Rk4 => Box::new(AdaptiveEngine::new(MethodKind::Classical)),
         EngineKind::Rapier => Box::new(RapierEngine::default()),
+    }
+}
+
+/// The engine kind (the name in scenario files) of an adaptive method.
+pub fn engine_kind_of(method: MethodKind) -> EngineKind {
+    match method {
+        MethodKind::DormandPrince => EngineKind::Native,
+        MethodKind::Imex => EngineKind::Imex,
+        MethodKind::Dop853 => EngineKind::Dop853,
+        MethodKind::Classical => EngineKind::Rk4,
+        MethodKind::Rosenbrock => EngineKind::Rosenbrock,
     }
 }
 

@@ -6,8 +6,8 @@ use std::io::Write;
 use fistage_model::Model;
 use serde::Serialize;
 
-use crate::dopri::StepCounts;
-use crate::excitation::Excitation;
+use fistage_model::excitation::Excitation;
+use fistage_ode::StepCounts;
 
 /// What the engine did.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
@@ -131,6 +131,17 @@ pub struct SignalTable {
 }
 
 impl SignalTable {
+    /// Writes the table as a version 7 MAT-file ([`fistage_model::mat`]).
+    pub fn write_mat<W: std::io::Write>(&self, out: &mut W) -> std::io::Result<()> {
+        fistage_model::mat::Signals {
+            times: &self.times,
+            names: &self.names,
+            units: &self.units,
+            columns: &self.columns,
+        }
+        .write_mat(out)
+    }
+
     /// The column of a named signal.
     pub fn column(&self, name: &str) -> Option<&[f64]> {
         self.names

@@ -15,7 +15,7 @@
 //! stage models use.
 
 use fistage_model::{DualSVec64, LugreOf, LugreParams, Scalar};
-use fistage_sim::dopri::{DormandPrince, OdeSystem, Tolerances};
+use fistage_ode::{AdaptiveMethod, DormandPrince, OdeSystem, Tolerances};
 use nalgebra::SVector;
 use num_dual::Derivative;
 

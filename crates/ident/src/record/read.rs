@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use fistage_sim::matread::{MatContent, MatVariable, read_variables};
+use fistage_model::mat::{MatContent, MatVariable, read_variables};
 
 use super::data::{Record, StartState};
 use crate::csv_input::{HeaderMatch, UnitOverrides, match_header, parse_record_csv, read_file};

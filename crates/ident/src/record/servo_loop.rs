@@ -16,10 +16,10 @@
 
 use std::path::Path;
 
+use fistage_model::initial_state;
 use fistage_model::{
     Controller, InputValues, Inputs, LugreParams, Model, Reference, Scalar, ServoValues, load,
 };
-use fistage_sim::run::initial_state;
 
 use crate::error::{IdentError, Result};
 

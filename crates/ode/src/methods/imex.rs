@@ -9,25 +9,16 @@
 //! while slipping) then no longer bounds the step.
 //!
 //! Fifth order with a fourth-order embedded estimate, the PI step-size
-//! controller and step-size rules of [`crate::dopri`], and cubic Hermite dense
+//! controller and step-size rules of [`crate::DormandPrince`], and cubic Hermite dense
 //! output from the values and derivatives at both ends of a step. Eight
 //! evaluations per step (seven stages and the derivative at the new point,
 //! which is the next step's first stage and the dense output's right end).
 
-use crate::controller::{EmbeddedPair, PiController, StepControl, accepted_step, step_control};
-use crate::dopri::{Checkpoint, OdeSystem, StepCounts, StepFailure, Tolerances, starting_step};
 use crate::hermite::HermiteStep;
+use crate::method::{AdaptiveMethod, MethodState};
 use crate::sized::{state_count, with_state_count};
-
-/// A system with some states treated implicitly.
-pub trait SplitSystem: OdeSystem {
-    /// Indices of the implicitly treated states.
-    fn implicit_states(&self) -> &[usize];
-    /// f(t, x) at an implicit stage: on entry the implicit entries of `x`
-    /// hold the stage's explicit part `c`, on return the values that solve
-    /// `x_i = c_i + step f_i(t, x)`; `dx` is f at the solved point.
-    fn rhs_implicit(&mut self, t: f64, x: &mut [f64], step: f64, dx: &mut [f64]);
-}
+use crate::step_control::{EmbeddedPair, PiController, StepControl, accepted_step, step_control};
+use crate::{Checkpoint, SplitSystem, StepCounts, StepFailure, Tolerances, starting_step};
 
 const EXPLICIT: [[f64; 8]; 8] = [
     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -217,38 +208,8 @@ pub struct ImexRungeKutta {
     non_finite: Option<usize>,
 }
 
-impl ImexRungeKutta {
-    /// Starts at (t0, x0): evaluates f once and picks an initial step.
-    pub fn new<S: SplitSystem + ?Sized>(
-        system: &mut S,
-        t0: f64,
-        x0: &[f64],
-        tol: Tolerances,
-    ) -> Self {
-        let mut integrator = Self::unstarted(system, t0, x0, tol);
-        system.rhs(t0, &integrator.x, &mut integrator.k[0]);
-        integrator.counts.rhs_evaluations += 1;
-        let (h, evaluations) = starting_step(
-            system,
-            t0,
-            &integrator.x,
-            &integrator.k[0],
-            &integrator.tol,
-            5.0,
-            &mut integrator.stage,
-            &mut integrator.x_new,
-        );
-        integrator.h = h;
-        integrator.counts.rhs_evaluations += evaluations;
-        integrator
-    }
-
-    fn unstarted<S: SplitSystem + ?Sized>(
-        system: &S,
-        t0: f64,
-        x0: &[f64],
-        tol: Tolerances,
-    ) -> Self {
+impl<S: SplitSystem + ?Sized> AdaptiveMethod<S> for ImexRungeKutta {
+    fn unstarted(system: &S, start: &Checkpoint, tol: Tolerances) -> Self {
         let n = system.dim();
         let implicit_states = system.implicit_states().to_vec();
         let zeros = || vec![0.0; n];
@@ -256,60 +217,72 @@ impl ImexRungeKutta {
             tol,
             n,
             implicit_states,
-            t: t0,
-            x: x0.to_vec(),
-            h: 0.0,
+            t: start.t,
+            x: start.x.clone(),
+            h: start.h,
             k: std::array::from_fn(|_| zeros()),
             stage: zeros(),
             x_new: zeros(),
-            dense: HermiteStep::new(t0, x0),
+            dense: HermiteStep::new(start.t, &start.x),
             controller: PiController::default(),
-            counts: StepCounts::default(),
+            counts: start.counts,
             non_finite: None,
         }
     }
 
-    /// Resumes from a [`Checkpoint`].
-    pub fn resume<S: SplitSystem + ?Sized>(
-        system: &mut S,
-        checkpoint: &Checkpoint,
-        tol: Tolerances,
-    ) -> Self {
-        let mut integrator = Self::unstarted(system, checkpoint.t, &checkpoint.x, tol);
-        integrator.h = checkpoint.h;
-        integrator.counts = checkpoint.counts;
-        integrator.restart(system);
-        integrator
+    fn start(&mut self, system: &mut S) {
+        system.rhs(self.t, &self.x, &mut self.k[0]);
+        self.counts.rhs_evaluations += 1;
+        let (h, evaluations) = starting_step(
+            system,
+            self.t,
+            &self.x,
+            &self.k[0],
+            &self.tol,
+            5.0,
+            &mut self.stage,
+            &mut self.x_new,
+        );
+        self.h = h;
+        self.counts.rhs_evaluations += evaluations;
     }
 
-    /// What is needed to resume.
-    pub fn checkpoint(&self) -> Checkpoint {
-        Checkpoint {
-            t: self.t,
-            x: self.x.clone(),
-            h: self.h,
-            counts: self.counts,
-        }
-    }
-
-    /// Restarts at the current point after a discontinuity of the inputs.
     /// The dense output of the last step is kept.
-    pub fn restart<S: SplitSystem + ?Sized>(&mut self, system: &mut S) {
+    fn restart(&mut self, system: &mut S) {
         self.dense.keep_end(&mut self.k[0]);
         system.rhs(self.t, &self.x, &mut self.k[0]);
         self.counts.rhs_evaluations += 1;
         self.controller.reset();
     }
 
-    /// One accepted step, not beyond `t_stop`.
-    pub fn step<S: SplitSystem + ?Sized>(
-        &mut self,
-        system: &mut S,
-        t_stop: f64,
-    ) -> Result<(), StepFailure> {
+    fn step(&mut self, system: &mut S, t_stop: f64) -> Result<(), StepFailure> {
         accepted_step(self, system, t_stop)
     }
 
+    fn interpolate(&mut self, _system: &mut S, t: f64, out: &mut [f64]) {
+        ImexRungeKutta::interpolate(self, t, out);
+    }
+}
+
+impl MethodState for ImexRungeKutta {
+    fn time(&self) -> f64 {
+        self.t
+    }
+
+    fn state(&self) -> &[f64] {
+        &self.x
+    }
+
+    fn proposed_step(&self) -> f64 {
+        self.h
+    }
+
+    fn counts(&self) -> StepCounts {
+        self.counts
+    }
+}
+
+impl ImexRungeKutta {
     /// The trial step ([`EmbeddedPair::trial`]) over `N` states (`N` = 0, `DYNAMIC`: `self.n`).
     #[inline(always)]
     fn attempt_sized<const N: usize, S: SplitSystem + ?Sized>(
@@ -426,7 +399,7 @@ impl<S: SplitSystem + ?Sized> EmbeddedPair<S> for ImexRungeKutta {
 
     /// One trial step of size h into `x_new`; the mean square of the scaled
     /// error estimate. Small systems take a copy of the arithmetic whose
-    /// length is a compile-time constant, as in [`crate::dopri`].
+    /// length is a compile-time constant, as in [`crate::DormandPrince`].
     fn trial(&mut self, system: &mut S, h: f64) -> f64 {
         with_state_count!(self.n, self.attempt_sized(system, h))
     }
@@ -445,6 +418,7 @@ impl<S: SplitSystem + ?Sized> EmbeddedPair<S> for ImexRungeKutta {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::OdeSystem;
 
     /// An oscillator x'' = -w^2 x driving a stiff lag z' = -lambda (z - x),
     /// z implicit. From z(0) = lambda^2 / (lambda^2 + w^2) the lag has no

@@ -3,7 +3,7 @@
 //! (the next step's first stage) takes the fourth stage's place in the
 //! weights, `y_hat = y + h/6 (k1 + 2 k2 + 2 k3 + k5)`, a third-order
 //! solution, so the error estimate is `h/6 (k4 - k5)`. Four evaluations a
-//! step, the PI step-size controller of [`crate::controller`] with
+//! step, the PI step-size controller of [`crate::step_control`] with
 //! fourth-order gains, cubic Hermite dense output from the values and
 //! derivatives at both ends of a step.
 //!
@@ -15,12 +15,13 @@
 //! error estimates hold the step near `h |lambda| = 2`, where the classical
 //! method spends four evaluations a step against six.
 
-use crate::controller::{
+use crate::hermite::HermiteStep;
+use crate::method::{AdaptiveMethod, MethodState};
+use crate::sized::{state_count, with_state_count};
+use crate::step_control::{
     EmbeddedPair, Gains, PiController, StepControl, accepted_step, step_control,
 };
-use crate::dopri::{Checkpoint, OdeSystem, StepCounts, StepFailure, Tolerances, starting_step};
-use crate::hermite::HermiteStep;
-use crate::sized::{state_count, with_state_count};
+use crate::{Checkpoint, OdeSystem, StepCounts, StepFailure, Tolerances, starting_step};
 
 /// The integrator between steps.
 pub struct ClassicalRungeKutta {
@@ -45,91 +46,79 @@ pub struct ClassicalRungeKutta {
     non_finite: Option<usize>,
 }
 
-impl ClassicalRungeKutta {
-    /// Starts at (t0, x0): evaluates f once and picks an initial step.
-    pub fn new<S: OdeSystem + ?Sized>(
-        system: &mut S,
-        t0: f64,
-        x0: &[f64],
-        tol: Tolerances,
-    ) -> Self {
-        let mut integrator = Self::unstarted(system.dim(), t0, x0, tol);
-        system.rhs(t0, &integrator.x, &mut integrator.k[0]);
-        integrator.counts.rhs_evaluations += 1;
-        let (h, evaluations) = starting_step(
-            system,
-            t0,
-            &integrator.x,
-            &integrator.k[0],
-            &integrator.tol,
-            4.0,
-            &mut integrator.stage,
-            &mut integrator.x_new,
-        );
-        integrator.h = h;
-        integrator.counts.rhs_evaluations += evaluations;
-        integrator
-    }
-
-    fn unstarted(n: usize, t0: f64, x0: &[f64], tol: Tolerances) -> Self {
+impl<S: OdeSystem + ?Sized> AdaptiveMethod<S> for ClassicalRungeKutta {
+    fn unstarted(system: &S, start: &Checkpoint, tol: Tolerances) -> Self {
+        let n = system.dim();
         let zeros = || vec![0.0; n];
         Self {
             tol,
             n,
-            t: t0,
-            x: x0.to_vec(),
-            h: 0.0,
+            t: start.t,
+            x: start.x.clone(),
+            h: start.h,
             k: std::array::from_fn(|_| zeros()),
             stage: zeros(),
             x_new: zeros(),
-            dense: HermiteStep::new(t0, x0),
+            dense: HermiteStep::new(start.t, &start.x),
             controller: PiController::with_gains(Gains::FOURTH_ORDER),
-            counts: StepCounts::default(),
+            counts: start.counts,
             non_finite: None,
         }
     }
 
-    /// Resumes from a [`Checkpoint`].
-    pub fn resume<S: OdeSystem + ?Sized>(
-        system: &mut S,
-        checkpoint: &Checkpoint,
-        tol: Tolerances,
-    ) -> Self {
-        let mut integrator = Self::unstarted(system.dim(), checkpoint.t, &checkpoint.x, tol);
-        integrator.h = checkpoint.h;
-        integrator.counts = checkpoint.counts;
-        integrator.restart(system);
-        integrator
+    fn start(&mut self, system: &mut S) {
+        system.rhs(self.t, &self.x, &mut self.k[0]);
+        self.counts.rhs_evaluations += 1;
+        let (h, evaluations) = starting_step(
+            system,
+            self.t,
+            &self.x,
+            &self.k[0],
+            &self.tol,
+            4.0,
+            &mut self.stage,
+            &mut self.x_new,
+        );
+        self.h = h;
+        self.counts.rhs_evaluations += evaluations;
     }
 
-    /// What is needed to resume.
-    pub fn checkpoint(&self) -> Checkpoint {
-        Checkpoint {
-            t: self.t,
-            x: self.x.clone(),
-            h: self.h,
-            counts: self.counts,
-        }
-    }
-
-    /// Restarts at the current point after a discontinuity of the inputs.
     /// The dense output of the last step is kept.
-    pub fn restart<S: OdeSystem + ?Sized>(&mut self, system: &mut S) {
+    fn restart(&mut self, system: &mut S) {
         self.dense.keep_end(&mut self.k[0]);
         system.rhs(self.t, &self.x, &mut self.k[0]);
         self.counts.rhs_evaluations += 1;
         self.controller.reset();
     }
 
-    /// One accepted step, not beyond `t_stop`.
-    pub fn step<S: OdeSystem + ?Sized>(
-        &mut self,
-        system: &mut S,
-        t_stop: f64,
-    ) -> Result<(), StepFailure> {
+    fn step(&mut self, system: &mut S, t_stop: f64) -> Result<(), StepFailure> {
         accepted_step(self, system, t_stop)
     }
 
+    fn interpolate(&mut self, _system: &mut S, t: f64, out: &mut [f64]) {
+        ClassicalRungeKutta::interpolate(self, t, out);
+    }
+}
+
+impl MethodState for ClassicalRungeKutta {
+    fn time(&self) -> f64 {
+        self.t
+    }
+
+    fn state(&self) -> &[f64] {
+        &self.x
+    }
+
+    fn proposed_step(&self) -> f64 {
+        self.h
+    }
+
+    fn counts(&self) -> StepCounts {
+        self.counts
+    }
+}
+
+impl ClassicalRungeKutta {
     /// The trial step ([`EmbeddedPair::trial`]) over `N` states (`N` = 0, `DYNAMIC`: `self.n`).
     #[inline(always)]
     fn attempt_sized<const N: usize, S: OdeSystem + ?Sized>(
@@ -205,7 +194,7 @@ impl<S: OdeSystem + ?Sized> EmbeddedPair<S> for ClassicalRungeKutta {
 
     /// One trial step of size h into `x_new` (with f there in slot 4); the
     /// mean square of the scaled error estimate. Small systems take a copy
-    /// whose length is a compile-time constant, as in [`crate::dopri`].
+    /// whose length is a compile-time constant, as in [`crate::DormandPrince`].
     fn trial(&mut self, system: &mut S, h: f64) -> f64 {
         with_state_count!(self.n, self.attempt_sized(system, h))
     }
@@ -223,7 +212,7 @@ impl<S: OdeSystem + ?Sized> EmbeddedPair<S> for ClassicalRungeKutta {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dopri::tests::{Oscillator, oscillator_tolerances};
+    use crate::methods::dormand_prince::tests::{Oscillator, oscillator_tolerances};
 
     fn run(rtol: f64) -> (f64, f64, StepCounts) {
         let w = 2.0 * std::f64::consts::PI;
@@ -289,7 +278,7 @@ mod tests {
         while rk.t < 0.1 {
             rk.step(&mut Mode, 0.1).expect("step");
         }
-        let mut dp = crate::dopri::DormandPrince::new(&mut Mode, 0.0, &x0, tol());
+        let mut dp = crate::DormandPrince::new(&mut Mode, 0.0, &x0, tol());
         while dp.t < 0.1 {
             dp.step(&mut Mode, 0.1).expect("step");
         }

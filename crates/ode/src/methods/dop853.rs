@@ -3,7 +3,7 @@
 //! step plus the derivative at the new point (the next step's first stage);
 //! the error estimate blends the embedded fifth- and third-order solutions
 //! as Hairer's DOP853 does, and the step-size controller is the shared one
-//! with his eighth-order gains ([`crate::controller`]). The seventh-order
+//! with his eighth-order gains ([`crate::step_control`]). The seventh-order
 //! continuous extension takes three more evaluations, made only for the
 //! steps that hold an output sample (or, before a restart replaces the
 //! last derivative, at once). Independent of fistage models: it integrates
@@ -11,11 +11,12 @@
 
 mod tableau;
 
-use crate::controller::{
+use crate::method::{AdaptiveMethod, MethodState};
+use crate::sized::{state_count, with_state_count};
+use crate::step_control::{
     EmbeddedPair, Gains, PiController, StepControl, accepted_step, step_control,
 };
-use crate::dopri::{OdeSystem, StepCounts, StepFailure, Tolerances, starting_step};
-use crate::sized::{state_count, with_state_count};
+use crate::{Checkpoint, OdeSystem, StepCounts, StepFailure, Tolerances, starting_step};
 use tableau::{ALL, COUPLING, DENSE, ERROR_FIFTH, ERROR_THIRD, NODES, STEPPING, WEIGHTS};
 
 /// Where stage `j` of the last accepted step is kept between steps: the
@@ -61,41 +62,16 @@ pub struct Dop853 {
     non_finite: Option<usize>,
 }
 
-impl Dop853 {
-    /// Starts at (t0, x0): evaluates f once and picks an initial step.
-    pub fn new<S: OdeSystem + ?Sized>(
-        system: &mut S,
-        t0: f64,
-        x0: &[f64],
-        tol: Tolerances,
-    ) -> Self {
-        let mut integrator = Self::unstarted(system.dim(), t0, x0, tol);
-        system.rhs(t0, &integrator.x, &mut integrator.k[0]);
-        integrator.counts.rhs_evaluations += 1;
-        let (first, rest) = integrator.k.split_at_mut(1);
-        let (h, evaluations) = starting_step(
-            system,
-            t0,
-            &integrator.x,
-            &first[0],
-            &integrator.tol,
-            8.0,
-            &mut integrator.stage,
-            &mut rest[0],
-        );
-        integrator.h = h;
-        integrator.counts.rhs_evaluations += evaluations;
-        integrator
-    }
-
-    fn unstarted(n: usize, t0: f64, x0: &[f64], tol: Tolerances) -> Self {
+impl<S: OdeSystem + ?Sized> AdaptiveMethod<S> for Dop853 {
+    fn unstarted(system: &S, start: &Checkpoint, tol: Tolerances) -> Self {
+        let n = system.dim();
         let zeros = || vec![0.0; n];
         Self {
             tol,
             n,
-            t: t0,
-            x: x0.to_vec(),
-            h: 0.0,
+            t: start.t,
+            x: start.x.clone(),
+            h: start.h,
             k: std::array::from_fn(|_| zeros()),
             stage: zeros(),
             x_new: zeros(),
@@ -103,34 +79,83 @@ impl Dop853 {
             error_third: zeros(),
             dense: std::array::from_fn(|_| zeros()),
             dense_formed: true,
-            t_previous: t0,
+            t_previous: start.t,
             h_previous: 0.0,
             controller: PiController::with_gains(Gains::EIGHTH_ORDER),
-            counts: StepCounts::default(),
+            counts: start.counts,
             non_finite: None,
         }
     }
 
-    /// Restarts at the current point after a discontinuity of the inputs.
+    fn start(&mut self, system: &mut S) {
+        system.rhs(self.t, &self.x, &mut self.k[0]);
+        self.counts.rhs_evaluations += 1;
+        let (first, rest) = self.k.split_at_mut(1);
+        let (h, evaluations) = starting_step(
+            system,
+            self.t,
+            &self.x,
+            &first[0],
+            &self.tol,
+            8.0,
+            &mut self.stage,
+            &mut rest[0],
+        );
+        self.h = h;
+        self.counts.rhs_evaluations += evaluations;
+    }
+
     /// The last step's continuous extension is formed first (its stages lie
     /// inside the step, before the discontinuity), so it is kept.
-    pub fn restart<S: OdeSystem + ?Sized>(&mut self, system: &mut S) {
+    fn restart(&mut self, system: &mut S) {
         self.form_dense(system);
         system.rhs(self.t, &self.x, &mut self.k[0]);
         self.counts.rhs_evaluations += 1;
         self.controller.reset();
     }
 
-    /// One accepted step, not beyond `t_stop`. Rejected attempts are retried
-    /// with a smaller step; a non-finite error estimate counts as a rejection.
-    pub fn step<S: OdeSystem + ?Sized>(
-        &mut self,
-        system: &mut S,
-        t_stop: f64,
-    ) -> Result<(), StepFailure> {
+    fn step(&mut self, system: &mut S, t_stop: f64) -> Result<(), StepFailure> {
         accepted_step(self, system, t_stop)
     }
 
+    /// The state at `t` inside the last accepted step: the seventh-order
+    /// continuous extension, formed on the first call in a step.
+    fn interpolate(&mut self, system: &mut S, t: f64, out: &mut [f64]) {
+        let h = self.h_previous;
+        if h <= 0.0 {
+            out[..self.n].copy_from_slice(&self.x);
+            return;
+        }
+        self.form_dense(system);
+        let s = ((t - self.t_previous) / h).clamp(0.0, 1.0);
+        let s1 = 1.0 - s;
+        let d = &self.dense;
+        for m in 0..self.n {
+            let upper = d[3][m] + s * (d[4][m] + s1 * (d[5][m] + s * d[6][m]));
+            out[m] = self.x_new[m] + s * (d[0][m] + s1 * (d[1][m] + s * (d[2][m] + s1 * upper)));
+        }
+    }
+}
+
+impl MethodState for Dop853 {
+    fn time(&self) -> f64 {
+        self.t
+    }
+
+    fn state(&self) -> &[f64] {
+        &self.x
+    }
+
+    fn proposed_step(&self) -> f64 {
+        self.h
+    }
+
+    fn counts(&self) -> StepCounts {
+        self.counts
+    }
+}
+
+impl Dop853 {
     /// The trial step ([`EmbeddedPair::trial`]) over `N` states (`N` = 0, `DYNAMIC`: `self.n`).
     #[inline(always)]
     fn attempt_sized<const N: usize, S: OdeSystem + ?Sized>(
@@ -223,24 +248,6 @@ impl Dop853 {
         self.dense_formed = true;
     }
 
-    /// The state at `t` inside the last accepted step: the seventh-order
-    /// continuous extension, formed on the first call in a step.
-    pub fn interpolate<S: OdeSystem + ?Sized>(&mut self, system: &mut S, t: f64, out: &mut [f64]) {
-        let h = self.h_previous;
-        if h <= 0.0 {
-            out[..self.n].copy_from_slice(&self.x);
-            return;
-        }
-        self.form_dense(system);
-        let s = ((t - self.t_previous) / h).clamp(0.0, 1.0);
-        let s1 = 1.0 - s;
-        let d = &self.dense;
-        for m in 0..self.n {
-            let upper = d[3][m] + s * (d[4][m] + s1 * (d[5][m] + s * d[6][m]));
-            out[m] = self.x_new[m] + s * (d[0][m] + s1 * (d[1][m] + s * (d[2][m] + s1 * upper)));
-        }
-    }
-
     /// Start time of the last accepted step.
     pub fn previous_time(&self) -> f64 {
         self.t_previous
@@ -272,7 +279,7 @@ impl<S: OdeSystem + ?Sized> EmbeddedPair<S> for Dop853 {
     /// One trial step of size h into `x_new`; the square of Hairer's blended
     /// error norm, `h |e5|^2 / sqrt(n (|e5|^2 + 0.01 |e3|^2))`. Small systems
     /// take a copy of the arithmetic whose length is a compile-time
-    /// constant, as in [`crate::dopri`].
+    /// constant, as in [`crate::DormandPrince`].
     fn trial(&mut self, system: &mut S, h: f64) -> f64 {
         with_state_count!(self.n, self.attempt_sized(system, h))
     }

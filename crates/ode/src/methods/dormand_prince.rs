@@ -1,31 +1,11 @@
 //! Dormand-Prince 5(4): an explicit embedded Runge-Kutta pair with the FSAL
 //! property, a PI step-size controller and Hairer's fourth-order continuous
-//! extension for dense output. Independent of fistage models: it integrates any
-//! [`OdeSystem`].
+//! extension for dense output.
 
-use crate::controller::{EmbeddedPair, PiController, StepControl, accepted_step, step_control};
+use crate::method::{AdaptiveMethod, MethodState};
 use crate::sized::{state_count, with_state_count};
-
-/// A system `x' = f(t, x)`.
-pub trait OdeSystem {
-    /// Number of states.
-    fn dim(&self) -> usize;
-    /// Writes f(t, x) into `dx`.
-    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]);
-}
-
-/// Step-size controller and tolerance settings.
-#[derive(Debug, Clone)]
-pub struct Tolerances {
-    /// Relative tolerance.
-    pub rtol: f64,
-    /// Absolute tolerance per state.
-    pub atol: Vec<f64>,
-    /// Largest step, s.
-    pub max_step: f64,
-    /// Smallest step relative to |t| before the run is declared failed.
-    pub min_step_relative: f64,
-}
+use crate::step_control::{EmbeddedPair, PiController, StepControl, accepted_step, step_control};
+use crate::{Checkpoint, OdeSystem, StepCounts, StepFailure, Tolerances, starting_step};
 
 const C2: f64 = 1.0 / 5.0;
 const C3: f64 = 3.0 / 10.0;
@@ -64,118 +44,6 @@ const D5: f64 = 701980252875.0 / 199316789632.0;
 const D6: f64 = -1453857185.0 / 822651844.0;
 const D7: f64 = 69997945.0 / 29380423.0;
 
-impl Tolerances {
-    /// The step to try from `t` toward `t_stop` given a suggestion: the
-    /// suggestion capped by `max_step`, or exactly the rest when that is
-    /// (nearly) all of it, with whether the step lands on `t_stop`. None when
-    /// the step has fallen below round-off level.
-    pub fn next_step(&self, t: f64, suggested: f64, t_stop: f64) -> Option<(f64, bool)> {
-        let remaining = t_stop - t;
-        let h = suggested.min(self.max_step);
-        let lands = h >= remaining * (1.0 - 1e-12);
-        let h = if lands { remaining } else { h };
-        let h_min = self.min_step_relative * t.abs().max(1.0);
-        (h >= h_min || h >= remaining).then_some((h, lands))
-    }
-
-    /// The next step suggestion after an accepted step of the proposed new
-    /// size: a step cut short to land on a stop time does not shrink it
-    /// below the suggestion it replaced.
-    pub fn suggestion_after(previous: f64, proposed: f64, landed: bool) -> f64 {
-        if landed {
-            previous.max(proposed)
-        } else {
-            proposed
-        }
-    }
-}
-
-/// Hairer's starting-step heuristic for a method of order `order` from
-/// (t, x) with f(t, x) = `f0`: the step and the evaluations it took (one).
-/// `stage` and `f1` are scratch space of the state's length.
-#[allow(clippy::too_many_arguments)]
-pub fn starting_step<S: OdeSystem + ?Sized>(
-    system: &mut S,
-    t: f64,
-    x: &[f64],
-    f0: &[f64],
-    tol: &Tolerances,
-    order: f64,
-    stage: &mut [f64],
-    f1: &mut [f64],
-) -> (f64, u64) {
-    let count = x.len();
-    let n = count as f64;
-    let scale = |i: usize| tol.atol[i] + tol.rtol * x[i].abs();
-    let mut d0 = 0.0;
-    let mut d1 = 0.0;
-    for i in 0..count {
-        let sc = scale(i);
-        d0 += (x[i] / sc).powi(2);
-        d1 += (f0[i] / sc).powi(2);
-    }
-    let (d0, d1) = ((d0 / n).sqrt(), (d1 / n).sqrt());
-    let mut h0 = if d0 < 1e-5 || d1 < 1e-5 {
-        1e-6
-    } else {
-        0.01 * d0 / d1
-    };
-    h0 = h0.min(tol.max_step);
-    for i in 0..count {
-        stage[i] = x[i] + h0 * f0[i];
-    }
-    system.rhs(t + h0, stage, f1);
-    let mut d2 = 0.0;
-    for i in 0..count {
-        d2 += ((f1[i] - f0[i]) / scale(i)).powi(2);
-    }
-    let d2 = (d2 / n).sqrt() / h0;
-    let h1 = if d1.max(d2) <= 1e-15 {
-        (h0 * 1e-3).max(1e-6)
-    } else {
-        (0.01 / d1.max(d2)).powf(1.0 / order)
-    };
-    ((100.0 * h0).min(h1).min(tol.max_step), 1)
-}
-
-/// Why a step attempt could not proceed.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum StepFailure {
-    /// The step size fell below the smallest allowed step at time t.
-    StepSizeUnderflow {
-        /// Time reached.
-        t: f64,
-        /// Step size tried.
-        h: f64,
-        /// First state that became non-finite in the last rejected attempt, if any.
-        non_finite: Option<usize>,
-    },
-}
-
-/// Counters of an integration.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
-pub struct StepCounts {
-    /// Accepted steps.
-    pub steps: u64,
-    /// Rejected steps.
-    pub rejected: u64,
-    /// Right-hand-side evaluations.
-    pub rhs_evaluations: u64,
-}
-
-/// Where an integration stands between steps: enough to resume it exactly.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Checkpoint {
-    /// Time.
-    pub t: f64,
-    /// State.
-    pub x: Vec<f64>,
-    /// Suggested next step.
-    pub h: f64,
-    /// Counters so far.
-    pub counts: StepCounts,
-}
-
 /// The integrator's state between steps, including the stages of the last
 /// accepted step (its dense output).
 pub struct DormandPrince {
@@ -201,81 +69,33 @@ pub struct DormandPrince {
     non_finite: Option<usize>,
 }
 
-impl DormandPrince {
-    /// Starts at (t0, x0); evaluates f once and picks an initial step.
-    pub fn new(system: &mut dyn OdeSystem, t0: f64, x0: &[f64], tol: Tolerances) -> Self {
-        let mut integrator = Self::new_unstarted(system.dim(), t0, x0, tol);
-        system.rhs(t0, &integrator.x, &mut integrator.k[0]);
-        integrator.counts.rhs_evaluations += 1;
-        integrator.h = integrator.initial_step(system);
-        integrator
-    }
-
-    fn new_unstarted(n: usize, t0: f64, x0: &[f64], tol: Tolerances) -> Self {
+impl<S: OdeSystem + ?Sized> AdaptiveMethod<S> for DormandPrince {
+    fn unstarted(system: &S, start: &Checkpoint, tol: Tolerances) -> Self {
+        let n = system.dim();
         let zeros = || vec![0.0; n];
         Self {
             tol,
             n,
-            t: t0,
-            x: x0.to_vec(),
-            h: 0.0,
-            k: [
-                zeros(),
-                zeros(),
-                zeros(),
-                zeros(),
-                zeros(),
-                zeros(),
-                zeros(),
-            ],
+            t: start.t,
+            x: start.x.clone(),
+            h: start.h,
+            k: std::array::from_fn(|_| zeros()),
             x_new: zeros(),
             stage: zeros(),
             last_stage_slot: 0,
-            t_previous: t0,
+            t_previous: start.t,
             h_previous: 0.0,
             controller: PiController::default(),
-            counts: StepCounts::default(),
+            counts: start.counts,
             non_finite: None,
         }
     }
 
-    /// Resumes from a [`Checkpoint`]: evaluates f at its point and keeps its
-    /// step suggestion and counters. Resuming from the checkpoint of an
-    /// integrator that was then [`restart`](Self::restart)ed continues exactly
-    /// as that integrator does, bit for bit.
-    pub fn resume(system: &mut dyn OdeSystem, checkpoint: &Checkpoint, tol: Tolerances) -> Self {
-        let mut integrator = Self::new_unstarted(system.dim(), checkpoint.t, &checkpoint.x, tol);
-        integrator.h = checkpoint.h;
-        integrator.counts = checkpoint.counts;
-        integrator.restart(system);
-        integrator
-    }
-
-    /// What is needed to resume: time, state, step suggestion, counters.
-    pub fn checkpoint(&self) -> Checkpoint {
-        Checkpoint {
-            t: self.t,
-            x: self.x.clone(),
-            h: self.h,
-            counts: self.counts,
-        }
-    }
-
-    /// Restarts at the current point (after a discontinuity in the inputs):
-    /// re-evaluates f and keeps the current step suggestion.
-    pub fn restart(&mut self, system: &mut dyn OdeSystem) {
-        // Slot 1 (the second stage) is free between steps: the new first
-        // stage goes there and the last step's last stage, which the dense
-        // output still needs, moves out of slot 0.
-        system.rhs(self.t, &self.x, &mut self.k[1]);
-        self.k.swap(0, 1);
-        self.last_stage_slot = 1;
+    /// Evaluates f once and picks the first step with Hairer's heuristic
+    /// ([`starting_step`]).
+    fn start(&mut self, system: &mut S) {
+        system.rhs(self.t, &self.x, &mut self.k[0]);
         self.counts.rhs_evaluations += 1;
-        self.controller.reset();
-    }
-
-    /// Hairer's starting-step heuristic ([`starting_step`]).
-    fn initial_step(&mut self, system: &mut dyn OdeSystem) -> f64 {
         let (k0, rest) = self.k.split_at_mut(1);
         let (h, evaluations) = starting_step(
             system,
@@ -287,20 +107,49 @@ impl DormandPrince {
             &mut self.stage,
             &mut rest[0],
         );
+        self.h = h;
         self.counts.rhs_evaluations += evaluations;
-        h
     }
 
-    /// Takes one accepted step, not beyond `t_stop`. Rejected attempts are retried
-    /// with a smaller step. A non-finite error estimate counts as a rejection.
-    pub fn step<S: OdeSystem + ?Sized>(
-        &mut self,
-        system: &mut S,
-        t_stop: f64,
-    ) -> Result<(), StepFailure> {
+    fn restart(&mut self, system: &mut S) {
+        // Slot 1 (the second stage) is free between steps: the new first
+        // stage goes there and the last step's last stage, which the dense
+        // output still needs, moves out of slot 0.
+        system.rhs(self.t, &self.x, &mut self.k[1]);
+        self.k.swap(0, 1);
+        self.last_stage_slot = 1;
+        self.counts.rhs_evaluations += 1;
+        self.controller.reset();
+    }
+
+    fn step(&mut self, system: &mut S, t_stop: f64) -> Result<(), StepFailure> {
         accepted_step(self, system, t_stop)
     }
 
+    fn interpolate(&mut self, _system: &mut S, t: f64, out: &mut [f64]) {
+        DormandPrince::interpolate(self, t, out);
+    }
+}
+
+impl MethodState for DormandPrince {
+    fn time(&self) -> f64 {
+        self.t
+    }
+
+    fn state(&self) -> &[f64] {
+        &self.x
+    }
+
+    fn proposed_step(&self) -> f64 {
+        self.h
+    }
+
+    fn counts(&self) -> StepCounts {
+        self.counts
+    }
+}
+
+impl DormandPrince {
     /// The trial step ([`EmbeddedPair::trial`]) over `N` states (`N` = 0, `DYNAMIC`: `self.n`).
     #[inline(always)]
     fn attempt_sized<const N: usize, S: OdeSystem + ?Sized>(

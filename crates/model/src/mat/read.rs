@@ -334,16 +334,16 @@ fn numbers(kind: u32, data: &[u8], order: Order) -> Option<Vec<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::trajectory::SignalTable;
+    use crate::mat::Signals;
 
     /// The crate's own writer's files read back: names and values.
     #[test]
     fn reads_what_the_writer_writes() {
-        let table = SignalTable {
-            times: vec![0.0, 0.5, 1.0],
-            names: vec!["table_x.q".into(), "encoder.position".into()],
-            units: vec!["m".into(), "m".into()],
-            columns: vec![vec![1.0, -2.5, 3.25], vec![1e-9, 2e-9, 7.0]],
+        let table = Signals {
+            times: &[0.0, 0.5, 1.0],
+            names: &["table_x.q".into(), "encoder.position".into()],
+            units: &["m".into(), "m".into()],
+            columns: &[vec![1.0, -2.5, 3.25], vec![1e-9, 2e-9, 7.0]],
         };
         let mut bytes = Vec::new();
         table.write_mat(&mut bytes).expect("in memory");
@@ -383,11 +383,11 @@ mod tests {
         hdf.resize(1024, 0);
         assert_eq!(read_variables(&hdf), Err(MatReadError::Version73));
         let mut truncated = Vec::new();
-        SignalTable {
-            times: vec![0.0; 100],
-            names: vec![],
-            units: vec![],
-            columns: vec![],
+        Signals {
+            times: &[0.0; 100],
+            names: &[],
+            units: &[],
+            columns: &[],
         }
         .write_mat(&mut truncated)
         .expect("in memory");

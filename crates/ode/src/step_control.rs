@@ -6,7 +6,7 @@
 //! it (`accepted_step`), so the way from one step's error to the next
 //! step's size is written once.
 
-use crate::dopri::{StepFailure, Tolerances};
+use crate::{StepFailure, Tolerances};
 
 /// Controller state: the logarithm of the last accepted step's error norm.
 #[derive(Debug, Clone, Copy)]
@@ -153,7 +153,7 @@ pub(crate) struct StepControl<'a> {
 /// names (`t`, `h`, `tol`, `controller`, `counts`, `non_finite`).
 macro_rules! step_control {
     ($pair:expr) => {
-        $crate::controller::StepControl {
+        $crate::step_control::StepControl {
             t: $pair.t,
             h: &mut $pair.h,
             tol: &$pair.tol,

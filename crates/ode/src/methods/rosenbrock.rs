@@ -15,7 +15,8 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::dopri::{OdeSystem, StepCounts, StepFailure, Tolerances};
+use crate::method::{AdaptiveMethod, MethodState};
+use crate::{Checkpoint, JacobianSystem, StepCounts, StepFailure, Tolerances, starting_step};
 
 const GAMMA: f64 = 4.358_665_215_084_59e-1;
 const A21: f64 = 8.717_330_430_169_180_1e-1;
@@ -45,12 +46,6 @@ const C3: f64 = A31 + A32;
 /// Accepted steps over which one Jacobian is reused.
 const JACOBIAN_REUSE: u32 = 16;
 
-/// A system that also gives its Jacobian `df/dx`.
-pub trait JacobianSystem: OdeSystem {
-    /// `df/dx` at (t, x).
-    fn jacobian(&mut self, t: f64, x: &[f64]) -> DMatrix<f64>;
-}
-
 /// The integrator's state between steps.
 pub struct Rosenbrock {
     tol: Tolerances,
@@ -70,44 +65,114 @@ pub struct Rosenbrock {
     pub counts: StepCounts,
     /// Jacobians computed.
     pub jacobians: u64,
+    /// The span whose thousandth is the first step, where the caller knows
+    /// one (see [`Rosenbrock::with_initial_span`]).
+    initial_span: Option<f64>,
 }
 
-impl Rosenbrock {
-    /// Starts at (t0, x0) with a first step of a thousandth of `initial_span`.
-    pub fn new(
-        system: &mut dyn JacobianSystem,
-        t0: f64,
-        x0: &[f64],
-        tol: Tolerances,
-        initial_span: f64,
-    ) -> Self {
+impl<S: JacobianSystem + ?Sized> AdaptiveMethod<S> for Rosenbrock {
+    fn unstarted(system: &S, start: &Checkpoint, tol: Tolerances) -> Self {
         let n = system.dim();
-        let mut integrator = Self {
-            h: (initial_span * 1e-3).min(tol.max_step),
+        Self {
+            h: start.h,
             tol,
             n,
-            t: t0,
-            x: x0.to_vec(),
+            t: start.t,
+            x: start.x.clone(),
             f: vec![0.0; n],
             jacobian: DMatrix::zeros(n, n),
             jacobian_age: JACOBIAN_REUSE,
-            previous: (t0, 0.0, x0.to_vec(), vec![0.0; n]),
+            previous: (start.t, 0.0, start.x.clone(), vec![0.0; n]),
             buffers: StageBuffers::new(n),
-            counts: StepCounts::default(),
+            counts: start.counts,
             jacobians: 0,
-        };
-        integrator.restart(system);
-        integrator
+            initial_span: None,
+        }
+    }
+
+    /// The first step is a thousandth of the initial span where one was
+    /// given, else Hairer's starting step for a third-order method.
+    fn start(&mut self, system: &mut S) {
+        match self.initial_span {
+            Some(span) => {
+                self.h = (span * 1e-3).min(self.tol.max_step);
+                self.restart(system);
+            }
+            None => {
+                self.restart(system);
+                let (h, evaluations) = starting_step(
+                    system,
+                    self.t,
+                    &self.x,
+                    &self.f,
+                    &self.tol,
+                    3.0,
+                    self.buffers.y.as_mut_slice(),
+                    &mut self.buffers.x_new,
+                );
+                self.h = h;
+                self.counts.rhs_evaluations += evaluations;
+            }
+        }
     }
 
     /// Restarts at the current point after a discontinuity: new f and Jacobian.
-    pub fn restart(&mut self, system: &mut dyn JacobianSystem) {
+    fn restart(&mut self, system: &mut S) {
         system.rhs(self.t, &self.x, &mut self.f);
         self.counts.rhs_evaluations += 1;
         self.jacobian_age = JACOBIAN_REUSE;
     }
 
-    fn refresh_jacobian(&mut self, system: &mut dyn JacobianSystem) {
+    fn step(&mut self, system: &mut S, t_stop: f64) -> Result<(), StepFailure> {
+        self.accepted_step(system, t_stop)
+    }
+
+    fn interpolate(&mut self, _system: &mut S, t: f64, out: &mut [f64]) {
+        Rosenbrock::interpolate(self, t, out);
+    }
+}
+
+impl MethodState for Rosenbrock {
+    fn time(&self) -> f64 {
+        self.t
+    }
+
+    fn state(&self) -> &[f64] {
+        &self.x
+    }
+
+    fn proposed_step(&self) -> f64 {
+        self.h
+    }
+
+    fn counts(&self) -> StepCounts {
+        self.counts
+    }
+}
+
+impl Rosenbrock {
+    /// Starts at (t0, x0) with a first step of a thousandth of
+    /// `initial_span` (e.g. the sampling interval).
+    pub fn with_initial_span<S: JacobianSystem + ?Sized>(
+        system: &mut S,
+        t0: f64,
+        x0: &[f64],
+        tol: Tolerances,
+        initial_span: f64,
+    ) -> Self {
+        let start = Checkpoint {
+            t: t0,
+            x: x0.to_vec(),
+            h: 0.0,
+            counts: StepCounts::default(),
+        };
+        let mut integrator = Self::unstarted(system, &start, tol);
+        integrator.initial_span = Some(initial_span);
+        integrator.start(system);
+        integrator
+    }
+
+    fn refresh_jacobian<S: JacobianSystem + ?Sized>(&mut self, system: &mut S) {
         self.jacobian = system.jacobian(self.t, &self.x);
         self.jacobians += 1;
         self.counts.rhs_evaluations += self.n as u64;
@@ -127,7 +192,7 @@ impl Rosenbrock {
     /// The four stages of a step of length h, leaving the new state and the
     /// error estimate in the buffers; false when `I - h gamma J` cannot be
     /// solved.
-    fn stages(&mut self, system: &mut dyn JacobianSystem, h: f64) -> bool {
+    fn stages<S: JacobianSystem + ?Sized>(&mut self, system: &mut S, h: f64) -> bool {
         let n = self.n;
         let buffers = &mut self.buffers;
         buffers.w.copy_from(&self.jacobian);
@@ -184,10 +249,12 @@ impl Rosenbrock {
         true
     }
 
-    /// Takes one accepted step, not beyond `t_stop`.
-    pub fn step(
+    /// One accepted step, not beyond `t_stop`: the W-method's own step
+    /// loop (its step-size rule and its rejections on a singular
+    /// iteration matrix are not the embedded pairs').
+    fn accepted_step<S: JacobianSystem + ?Sized>(
         &mut self,
-        system: &mut dyn JacobianSystem,
+        system: &mut S,
         t_stop: f64,
     ) -> Result<(), StepFailure> {
         loop {

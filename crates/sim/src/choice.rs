@@ -1,8 +1,8 @@
 //! Which integration method the default engine (`auto`) takes for a model,
 //! decided once from the model's linearisation and the run's tolerance
 //! before a run: the explicit Dormand-Prince 5(4), the classical
-//! fourth-order method (see [`crate::rk4`]), or the implicit-explicit
-//! `ARK5(4)8L[2]SA` with the bristle states implicit (see [`crate::imex`]).
+//! fourth-order method ([`fistage_ode::ClassicalRungeKutta`]), or the implicit-explicit
+//! `ARK5(4)8L[2]SA` with the bristle states implicit ([`fistage_ode::ImexRungeKutta`]).
 //!
 //! The explicit step is bounded by the spectral radius of the Jacobian; the
 //! implicit-explicit one by that of its explicit part, the Jacobian with the
@@ -25,6 +25,7 @@
 
 use fistage_model::eigen::spectral_radius;
 use fistage_model::{EquilibriumKind, Inputs, Model};
+use fistage_ode::MethodKind;
 
 /// How much the implicit treatment of the bristles must raise the bound on
 /// the explicit step before it pays (measured on the paper's Fig. 5b stage
@@ -35,33 +36,11 @@ pub const REQUIRED_GAIN: f64 = 4.0;
 /// fourth-order method instead of Dormand-Prince 5(4).
 pub const LOOSE_RTOL: f64 = 5e-7;
 
-/// An adaptive method of the default engine.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Method {
-    /// Explicit Dormand-Prince 5(4).
-    DormandPrince,
-    /// `ARK5(4)8L[2]SA`, the bristle states implicit.
-    ImexBristles,
-    /// The classical fourth-order method with a third-order estimate.
-    Classical,
-}
-
-impl Method {
-    /// The engine name of the method.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::DormandPrince => "native",
-            Self::ImexBristles => "imex",
-            Self::Classical => "rk4",
-        }
-    }
-}
-
 /// The method and what it was chosen from.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MethodChoice {
     /// The method.
-    pub method: Method,
+    pub method: MethodKind,
     /// Spectral radius of the Jacobian at the slipping equilibrium, 1/s (if found).
     pub full_radius: Option<f64>,
     /// Spectral radius of its explicit part (bristle rows removed), 1/s.
@@ -75,11 +54,11 @@ pub struct MethodChoice {
 /// the equilibrium search at `start`.
 pub fn choose_method(model: &Model, slipping: &Inputs, start: &[f64], rtol: f64) -> MethodChoice {
     let choice = choose_split(model, slipping, start);
-    if choice.method != Method::DormandPrince || rtol < LOOSE_RTOL {
+    if choice.method != MethodKind::DormandPrince || rtol < LOOSE_RTOL {
         return choice;
     }
     MethodChoice {
-        method: Method::Classical,
+        method: MethodKind::Classical,
         reason: format!(
             "{}; at rtol {rtol:e} (from {LOOSE_RTOL:e}) the classical fourth-order method",
             choice.reason
@@ -92,7 +71,7 @@ pub fn choose_method(model: &Model, slipping: &Inputs, start: &[f64], rtol: f64)
 /// both explicit methods), read off the linearisation.
 fn choose_split(model: &Model, slipping: &Inputs, start: &[f64]) -> MethodChoice {
     let explicit = |reason: String| MethodChoice {
-        method: Method::DormandPrince,
+        method: MethodKind::DormandPrince,
         full_radius: None,
         explicit_radius: None,
         reason,
@@ -126,12 +105,12 @@ fn choose_split(model: &Model, slipping: &Inputs, start: &[f64]) -> MethodChoice
     let gain = full / explicit_part.max(f64::MIN_POSITIVE);
     let (method, verdict) = if gain >= REQUIRED_GAIN {
         (
-            Method::ImexBristles,
+            MethodKind::Imex,
             "the bristle relaxation bounds the explicit step",
         )
     } else {
         (
-            Method::DormandPrince,
+            MethodKind::DormandPrince,
             "the bristles do not bound the explicit step",
         )
     };

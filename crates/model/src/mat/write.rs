@@ -18,8 +18,6 @@ use std::io::{self, Write};
 use flate2::Compression;
 use flate2::write::ZlibEncoder;
 
-use crate::trajectory::SignalTable;
-
 const MI_INT8: u32 = 1;
 const MI_UINT16: u32 = 4;
 const MI_INT32: u32 = 5;
@@ -75,17 +73,30 @@ pub fn matlab_names(names: &[String], taken: &[&str]) -> Vec<String> {
         .collect()
 }
 
-impl SignalTable {
+/// A table of signals on one time grid, as the MAT-file holds it.
+#[derive(Debug, Clone, Copy)]
+pub struct Signals<'a> {
+    /// Sample times, s.
+    pub times: &'a [f64],
+    /// Signal names (any text; the variables get [`matlab_names`]).
+    pub names: &'a [String],
+    /// Their units.
+    pub units: &'a [String],
+    /// One column of samples per signal.
+    pub columns: &'a [Vec<f64>],
+}
+
+impl Signals<'_> {
     /// Writes the table as a version 7 MAT-file (see the module guide).
     pub fn write_mat<W: Write>(&self, out: &mut W) -> io::Result<()> {
         out.write_all(&header())?;
-        let names = matlab_names(&self.names, &["time", "signals"]);
-        write_variable(out, "time", &Value::Column(&self.times))?;
-        for (name, column) in names.iter().zip(&self.columns) {
+        let names = matlab_names(self.names, &["time", "signals"]);
+        write_variable(out, "time", &Value::Column(self.times))?;
+        for (name, column) in names.iter().zip(self.columns) {
             write_variable(out, name, &Value::Column(column))?;
         }
         let mut cells = vec![Value::Text("time"), Value::Text("time"), Value::Text("s")];
-        for ((name, original), unit) in names.iter().zip(&self.names).zip(&self.units) {
+        for ((name, original), unit) in names.iter().zip(self.names).zip(self.units) {
             cells.extend([Value::Text(name), Value::Text(original), Value::Text(unit)]);
         }
         let rows = cells.len() / 3;
@@ -209,11 +220,11 @@ mod tests {
     /// elements whose byte counts add up to the file.
     #[test]
     fn elements_tile_the_file() {
-        let table = SignalTable {
-            names: vec!["encoder.position".into()],
-            units: vec!["m".into()],
-            times: vec![0.0, 0.1, 0.2],
-            columns: vec![vec![1.0, 2.0, 3.0]],
+        let table = Signals {
+            names: &["encoder.position".into()],
+            units: &["m".into()],
+            times: &[0.0, 0.1, 0.2],
+            columns: &[vec![1.0, 2.0, 3.0]],
         };
         let mut bytes = Vec::new();
         table.write_mat(&mut bytes).expect("written");

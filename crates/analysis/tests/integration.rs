@@ -1,0 +1,9 @@
+//! The analysis crate's integration tests.
+//!
+//! One test binary per crate: every file of this folder is a module of it, so the
+//! crate graph is linked once for all of them.
+
+mod closed_loop_record;
+mod lab;
+mod robust;
+mod sweep_settings;

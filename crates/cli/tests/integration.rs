@@ -1,0 +1,7 @@
+//! The `fistage` program end to end.
+//!
+//! One test binary per crate: every file of this folder is a module of it, so the
+//! crate graph is linked once for all of them.
+
+mod cli;
+mod slurm;

@@ -1,0 +1,7 @@
+//! The model crate's integration tests.
+//!
+//! One test binary per crate: every file of this folder is a module of it, so the
+//! crate graph is linked once for all of them.
+
+mod native;
+mod parameter_properties;
