@@ -76,7 +76,7 @@ impl AdaptiveEngine {
 
 impl Engine for AdaptiveEngine {
     fn kind(&self) -> EngineKind {
-        crate::select::engine_kind_of(self.method)
+        engine_kind_of(self.method)
     }
 
     fn simulate(
@@ -112,6 +112,17 @@ impl Engine for AdaptiveEngine {
                 })
             }
         }
+    }
+}
+
+/// The engine kind (the name in scenario files) of an adaptive method.
+pub fn engine_kind_of(method: MethodKind) -> EngineKind {
+    match method {
+        MethodKind::DormandPrince => EngineKind::Native,
+        MethodKind::Imex => EngineKind::Imex,
+        MethodKind::Dop853 => EngineKind::Dop853,
+        MethodKind::Classical => EngineKind::Rk4,
+        MethodKind::Rosenbrock => EngineKind::Rosenbrock,
     }
 }
 

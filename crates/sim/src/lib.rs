@@ -63,7 +63,7 @@ pub mod tracking;
 pub mod trajectory;
 
 pub use cosim::{HeldInputs, Stepper, StepperTolerances};
-pub use engine::{AdaptiveEngine, AutoEngine, Engine, Progress, no_progress};
+pub use engine::{AdaptiveEngine, AutoEngine, Engine, Progress, engine_kind_of, no_progress};
 pub use fistage_model::excitation::{
     Excitation, ScenarioExcitation, initial_state, initial_state_with,
 };
@@ -71,7 +71,7 @@ pub use fistage_ode::{Checkpoint, MethodKind, StepCounts};
 pub use metrics::{SignalSummary, WindowStats, summarize, window_stats};
 pub use rapier_engine::RapierEngine;
 pub use run::{RunError, RunOutput, run_scenario, validate};
-pub use select::{engine_for, engine_in, engine_kind_of, engine_of_kind};
+pub use select::{engine_for, engine_in, engine_of_kind};
 pub use settings::{SimError, SimSettings, sample_times};
 pub use tracking::{TrackingMetrics, tracking_metrics};
 pub use trajectory::{ExtraSignal, SignalTable, SolverStats, Trajectory};

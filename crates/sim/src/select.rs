@@ -21,17 +21,6 @@ pub fn engine_of_kind(kind: EngineKind) -> Box<dyn Engine> {
     }
 }
 
-/// The engine kind (the name in scenario files) of an adaptive method.
-pub fn engine_kind_of(method: MethodKind) -> EngineKind {
-    match method {
-        MethodKind::DormandPrince => EngineKind::Native,
-        MethodKind::Imex => EngineKind::Imex,
-        MethodKind::Dop853 => EngineKind::Dop853,
-        MethodKind::Classical => EngineKind::Rk4,
-        MethodKind::Rosenbrock => EngineKind::Rosenbrock,
-    }
-}
-
 /// The engine a scenario names (`solver.engine` or `engine`), with its settings.
 pub fn engine_for(scenario: &Scenario) -> Box<dyn Engine> {
     engine_in(scenario, scenario.solver.engine)
