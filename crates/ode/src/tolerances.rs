@@ -3,6 +3,7 @@
 //! to the time), the step each attempt may take towards a stop time, and
 //! Hairer's starting step ([`starting_step`]).
 
+use crate::StepCounts;
 use crate::system::OdeSystem;
 
 /// Step-size controller and tolerance settings.
@@ -42,6 +43,28 @@ impl Tolerances {
             proposed
         }
     }
+}
+
+/// How a method starts at (t, x): evaluates f there into `f0` and picks the
+/// first step with [`starting_step`] for a method of order `order`, counting
+/// both evaluations in `counts`. `stage` and `f1` are scratch space.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn first_step<S: OdeSystem + ?Sized>(
+    system: &mut S,
+    t: f64,
+    x: &[f64],
+    tol: &Tolerances,
+    order: f64,
+    f0: &mut [f64],
+    stage: &mut [f64],
+    f1: &mut [f64],
+    counts: &mut StepCounts,
+) -> f64 {
+    system.rhs(t, x, f0);
+    counts.rhs_evaluations += 1;
+    let (h, evaluations) = starting_step(system, t, x, f0, tol, order, stage, f1);
+    counts.rhs_evaluations += evaluations;
+    h
 }
 
 /// Hairer's starting-step heuristic for a method of order `order` from

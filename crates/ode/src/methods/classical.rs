@@ -21,7 +21,8 @@ use crate::sized::{state_count, with_state_count};
 use crate::step_control::{
     EmbeddedPair, Gains, PiController, StepControl, accepted_step, step_control,
 };
-use crate::{Checkpoint, OdeSystem, StepCounts, StepFailure, Tolerances, starting_step};
+use crate::tolerances::first_step;
+use crate::{Checkpoint, OdeSystem, StepCounts, StepFailure, Tolerances};
 
 /// The integrator between steps.
 pub struct ClassicalRungeKutta {
@@ -67,20 +68,17 @@ impl<S: OdeSystem + ?Sized> AdaptiveMethod<S> for ClassicalRungeKutta {
     }
 
     fn start(&mut self, system: &mut S) {
-        system.rhs(self.t, &self.x, &mut self.k[0]);
-        self.counts.rhs_evaluations += 1;
-        let (h, evaluations) = starting_step(
+        self.h = first_step(
             system,
             self.t,
             &self.x,
-            &self.k[0],
             &self.tol,
             4.0,
+            &mut self.k[0],
             &mut self.stage,
             &mut self.x_new,
+            &mut self.counts,
         );
-        self.h = h;
-        self.counts.rhs_evaluations += evaluations;
     }
 
     /// The dense output of the last step is kept.

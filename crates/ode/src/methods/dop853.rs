@@ -16,7 +16,8 @@ use crate::sized::{state_count, with_state_count};
 use crate::step_control::{
     EmbeddedPair, Gains, PiController, StepControl, accepted_step, step_control,
 };
-use crate::{Checkpoint, OdeSystem, StepCounts, StepFailure, Tolerances, starting_step};
+use crate::tolerances::first_step;
+use crate::{Checkpoint, OdeSystem, StepCounts, StepFailure, Tolerances};
 use tableau::{ALL, COUPLING, DENSE, ERROR_FIFTH, ERROR_THIRD, NODES, STEPPING, WEIGHTS};
 
 /// Where stage `j` of the last accepted step is kept between steps: the
@@ -88,21 +89,18 @@ impl<S: OdeSystem + ?Sized> AdaptiveMethod<S> for Dop853 {
     }
 
     fn start(&mut self, system: &mut S) {
-        system.rhs(self.t, &self.x, &mut self.k[0]);
-        self.counts.rhs_evaluations += 1;
         let (first, rest) = self.k.split_at_mut(1);
-        let (h, evaluations) = starting_step(
+        self.h = first_step(
             system,
             self.t,
             &self.x,
-            &first[0],
             &self.tol,
             8.0,
+            &mut first[0],
             &mut self.stage,
             &mut rest[0],
+            &mut self.counts,
         );
-        self.h = h;
-        self.counts.rhs_evaluations += evaluations;
     }
 
     /// The last step's continuous extension is formed first (its stages lie

@@ -5,7 +5,8 @@
 use crate::method::{AdaptiveMethod, MethodState};
 use crate::sized::{state_count, with_state_count};
 use crate::step_control::{EmbeddedPair, PiController, StepControl, accepted_step, step_control};
-use crate::{Checkpoint, OdeSystem, StepCounts, StepFailure, Tolerances, starting_step};
+use crate::tolerances::first_step;
+use crate::{Checkpoint, OdeSystem, StepCounts, StepFailure, Tolerances};
 
 const C2: f64 = 1.0 / 5.0;
 const C3: f64 = 3.0 / 10.0;
@@ -92,23 +93,20 @@ impl<S: OdeSystem + ?Sized> AdaptiveMethod<S> for DormandPrince {
     }
 
     /// Evaluates f once and picks the first step with Hairer's heuristic
-    /// ([`starting_step`]).
+    /// ([`crate::starting_step`]).
     fn start(&mut self, system: &mut S) {
-        system.rhs(self.t, &self.x, &mut self.k[0]);
-        self.counts.rhs_evaluations += 1;
-        let (k0, rest) = self.k.split_at_mut(1);
-        let (h, evaluations) = starting_step(
+        let (first, rest) = self.k.split_at_mut(1);
+        self.h = first_step(
             system,
             self.t,
             &self.x,
-            &k0[0],
             &self.tol,
             5.0,
+            &mut first[0],
             &mut self.stage,
             &mut rest[0],
+            &mut self.counts,
         );
-        self.h = h;
-        self.counts.rhs_evaluations += evaluations;
     }
 
     fn restart(&mut self, system: &mut S) {

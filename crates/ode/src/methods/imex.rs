@@ -18,7 +18,8 @@ use crate::hermite::HermiteStep;
 use crate::method::{AdaptiveMethod, MethodState};
 use crate::sized::{state_count, with_state_count};
 use crate::step_control::{EmbeddedPair, PiController, StepControl, accepted_step, step_control};
-use crate::{Checkpoint, SplitSystem, StepCounts, StepFailure, Tolerances, starting_step};
+use crate::tolerances::first_step;
+use crate::{Checkpoint, SplitSystem, StepCounts, StepFailure, Tolerances};
 
 const EXPLICIT: [[f64; 8]; 8] = [
     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -231,20 +232,17 @@ impl<S: SplitSystem + ?Sized> AdaptiveMethod<S> for ImexRungeKutta {
     }
 
     fn start(&mut self, system: &mut S) {
-        system.rhs(self.t, &self.x, &mut self.k[0]);
-        self.counts.rhs_evaluations += 1;
-        let (h, evaluations) = starting_step(
+        self.h = first_step(
             system,
             self.t,
             &self.x,
-            &self.k[0],
             &self.tol,
             5.0,
+            &mut self.k[0],
             &mut self.stage,
             &mut self.x_new,
+            &mut self.counts,
         );
-        self.h = h;
-        self.counts.rhs_evaluations += evaluations;
     }
 
     /// The dense output of the last step is kept.
