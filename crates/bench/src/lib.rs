@@ -3,6 +3,40 @@
 //! signals, no files), take the median of several repeats, and measure the
 //! error against a run at a much tighter tolerance. Identification cases time
 //! whole fits on the standard synthetic data sets.
+//!
+//! The harness is a crate of its own so that the library crates and the
+//! program's other commands do not carry it: `fistage bench` parses
+//! [`BenchArgs`] and calls [`run`]. Each table is a module: `matched.rs`
+//! (matched-accuracy ratios), `rhs.rs` (right-hand-side cost), `record.rs`
+//! (record fits), `robust.rs` (populations), `fmu.rs` (FMUs through the C
+//! ABI and FMPy), `python.rs` (the Python package), `peers/` (CVODE and
+//! SciPy); `timing.rs` is how everything is timed.
+//!
+//! ```no_run
+//! use clap::Parser;
+//!
+//! /// The program's `bench` command, as a program of its own.
+//! #[derive(Parser)]
+//! struct Bench {
+//!     #[command(flatten)]
+//!     args: fistage_bench::BenchArgs,
+//! }
+//!
+//! // The cost of one right-hand-side evaluation, compiled, generic and by
+//! // hand, as `fistage bench --rhs` prints it.
+//! let bench = Bench::parse_from(["bench", "--rhs", "--repeat", "3"]);
+//! fistage_bench::run(&bench.args)?;
+//! # Ok::<(), anyhow::Error>(())
+//! ```
+
+mod fmu;
+mod matched;
+pub mod peers;
+mod python;
+mod record;
+mod rhs;
+mod robust;
+mod timing;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -13,7 +47,8 @@ use fistage_sim::{
     Engine, Excitation, ScenarioExcitation, SimSettings, Trajectory, engine_for, initial_state,
 };
 
-use crate::bench_matched::{AccuracyRow, print_matched};
+use crate::matched::{AccuracyRow, print_matched};
+use crate::timing::{median, median_time, thread_cpu_time};
 
 /// Arguments of `fistage bench`.
 #[derive(clap::Args)]
@@ -105,21 +140,6 @@ fn fmu_python(args: &BenchArgs) -> PathBuf {
     })
 }
 
-/// CPU time of the calling thread, s.
-pub(crate) fn thread_cpu_time() -> f64 {
-    let mut spec = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: clock_gettime writes into the timespec we own; the clock id is a constant.
-    let status = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut spec) };
-    if status == 0 {
-        spec.tv_sec as f64 + spec.tv_nsec as f64 * 1e-9
-    } else {
-        f64::NAN
-    }
-}
-
 pub(crate) struct Timing {
     wall_s: f64,
     cpu_s: f64,
@@ -191,11 +211,6 @@ fn time_run(
         timer.once(engine)?;
     }
     timer.finish()
-}
-
-pub(crate) fn median(values: &mut [f64]) -> f64 {
-    values.sort_by(f64::total_cmp);
-    values[values.len() / 2]
 }
 
 /// Largest deviation of a signal between two trajectories on the same grid.
@@ -305,13 +320,13 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         );
     }
     if args.fmu {
-        return crate::bench_fmu::fmu_table(&fmu_python(args), args.repeat.min(5));
+        return crate::fmu::fmu_table(&fmu_python(args), args.repeat.min(5));
     }
     if args.stiffness {
         return stiffness_table(args);
     }
     if args.rhs {
-        return crate::bench_rhs::rhs_table(args.repeat);
+        return crate::rhs::rhs_table(args.repeat);
     }
     if args.python_run {
         let python = args.python.clone().unwrap_or_else(|| {
@@ -322,19 +337,19 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                 PathBuf::from("python3")
             }
         });
-        return crate::bench_python::python_table(&python);
+        return crate::python::python_table(&python);
     }
     if args.record {
-        crate::bench_record::record_table(args.repeat)?;
+        crate::record::record_table(args.repeat)?;
         println!();
-        return crate::bench_record::coverage_table();
+        return crate::record::coverage_table();
     }
     if args.robust {
         let scenario = args
             .scenario
             .clone()
             .unwrap_or_else(|| PathBuf::from("scenarios/robust/four_bearing_population.toml"));
-        return crate::bench_robust::robust_table(&scenario);
+        return crate::robust::robust_table(&scenario);
     }
     if args.engines {
         let scenarios = match &args.scenario {
@@ -374,26 +389,11 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             println!();
             ident_table(args.repeat)?;
             println!();
-            crate::bench_record::record_table(args.repeat)?;
+            crate::record::record_table(args.repeat)?;
             println!();
-            crate::bench_fmu::fmu_table(&fmu_python(args), args.repeat.min(5))
+            crate::fmu::fmu_table(&fmu_python(args), args.repeat.min(5))
         }
     }
-}
-
-/// Median time of `repeat` calls, after one warm-up call.
-pub(crate) fn median_time(
-    repeat: usize,
-    mut f: impl FnMut() -> anyhow::Result<()>,
-) -> anyhow::Result<f64> {
-    f()?;
-    let mut times = Vec::with_capacity(repeat);
-    for _ in 0..repeat.max(1) {
-        let start = Instant::now();
-        f()?;
-        times.push(start.elapsed().as_secs_f64());
-    }
-    Ok(median(&mut times))
 }
 
 fn ident_table(repeat: usize) -> anyhow::Result<()> {

@@ -19,7 +19,7 @@ const REPEATS: usize = 15;
 /// Prints the Markdown table; `python` must import `fistage`.
 pub fn python_table(python: &Path) -> anyhow::Result<()> {
     let scenario = Path::new(SCENARIO);
-    let rust = crate::bench::median_time(REPEATS, || {
+    let rust = crate::timing::median_time(REPEATS, || {
         let loaded = fistage_model::load(scenario)?;
         let output = fistage_sim::run_scenario(&loaded, &mut fistage_sim::no_progress)?;
         let _ = fistage_sim::summary::document(&loaded, &output);

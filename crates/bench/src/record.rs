@@ -99,10 +99,10 @@ fn time_fit(
     let (mut walls, mut cpus) = (Vec::new(), Vec::new());
     let mut last = None;
     for _ in 0..repeat {
-        let (wall, cpu) = (Instant::now(), crate::bench::thread_cpu_time());
+        let (wall, cpu) = (Instant::now(), crate::timing::thread_cpu_time());
         let fit = fit_record(record, options, &mut |_| true)?;
         walls.push(wall.elapsed().as_secs_f64());
-        cpus.push(crate::bench::thread_cpu_time() - cpu);
+        cpus.push(crate::timing::thread_cpu_time() - cpu);
         last = Some(fit);
     }
     let fit = last.ok_or_else(|| anyhow::anyhow!("no fit"))?;

@@ -134,7 +134,7 @@ fn time_per_call(rounds: usize, calls: usize, mut evaluate: impl FnMut()) -> f64
             started.elapsed().as_secs_f64() * 1e9 / calls as f64
         })
         .collect();
-    crate::bench::median(&mut samples)
+    crate::timing::median(&mut samples)
 }
 
 /// Prints the Markdown table.

@@ -4,23 +4,15 @@
 // written for a terminal (`out/<scenario>`, `[sweep]`), not for rustdoc.
 #![allow(rustdoc::broken_intra_doc_links, rustdoc::invalid_html_tags)]
 
-mod bench;
-mod bench_fmu;
-mod bench_matched;
-mod bench_python;
-mod bench_record;
-mod bench_rhs;
-mod bench_robust;
 mod check;
 mod compare;
 mod figures;
 mod fmu;
 mod identify;
-mod identify_record;
+
 mod lyapunov;
 mod modes;
 mod output;
-mod peers;
 mod progress;
 mod provenance;
 mod robust;
@@ -50,7 +42,7 @@ enum Command {
     /// Load and validate a scenario and its robot; print the assembled model.
     Check(check::CheckArgs),
     /// Measure engine speed and accuracy (Markdown tables for BENCHMARKS.md).
-    Bench(bench::BenchArgs),
+    Bench(fistage_bench::BenchArgs),
     /// Equilibria, eigenvalues and mode shapes (table, modes.json, top-view pictures).
     Modes(modes::ModesArgs),
     /// Stability over a grid of one or two parameters (points.csv, points.json, map).
@@ -85,7 +77,7 @@ fn main() -> anyhow::Result<()> {
     match cli.command {
         Command::Run(args) => run::run(&args),
         Command::Identify(args) => identify::run(&args),
-        Command::Bench(args) => bench::run(&args),
+        Command::Bench(args) => fistage_bench::run(&args),
         Command::Check(args) => check::run(&args),
         Command::Modes(args) => modes::run(&args),
         Command::Sweep(args) => sweep::run(&args),

@@ -14,13 +14,13 @@ use crate::elements::{
     Body, Controller, Frame, FrictionContact, Isolator, Joint, JointMotion, MassBlock, PointAxis,
     SignalInfo, StateKind, StateLayout, Structure,
 };
+use crate::elements::{Feedforward, Observer, VirtualBearing};
 use crate::error::LoadError;
 use crate::evaluator::Evaluator;
 use crate::model::Model;
 use crate::parameter;
 use crate::robot::{JointKind, PointAxisSpec, RobotSpec};
 use crate::scenario::Scenario;
-use crate::servo::{Feedforward, Observer, VirtualBearing};
 
 /// Name of the root link.
 pub const WORLD: &str = "world";

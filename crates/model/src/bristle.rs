@@ -11,8 +11,8 @@
 //! state for exponents other than 1) stays explicit.
 
 use crate::elements::FrictionContact;
+use crate::elements::FrictionModel;
 use crate::scalar::Scalar;
-use crate::servo::FrictionModel;
 
 /// The bristle treatment of one evaluation, kept in the workspace.
 #[derive(Debug, Clone)]

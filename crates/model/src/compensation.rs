@@ -25,20 +25,20 @@
 //! the isolator*: with `isolator = "dynamic"` it simulates the bearing behind
 //! the isolator (its mass, the isolator's stiffness and damping along the
 //! contact axis, the friction model) driven by the reference, and feeds
-//! forward the isolator's pull on the table ([`crate::servo::VirtualBearing`]);
+//! forward the isolator's pull on the table ([`crate::elements::VirtualBearing`]);
 //! with `"static"` it neglects the bearing's mass and feeds forward the
 //! friction model with its pre-motion stiffness and damping in series with
-//! the isolator's (paper Eq. 1, [`crate::servo::FrictionModel::felt_through`]);
+//! the isolator's (paper Eq. 1, [`crate::elements::FrictionModel::felt_through`]);
 //! with `"ignore"` it feeds the model forward as if it acted at the table.
 
 use std::collections::BTreeMap;
 
 use crate::dahl::DahlParams;
+use crate::elements::FrictionModel;
 use crate::error::LoadError;
 use crate::lugre::LugreParams;
 use crate::robot::RobotSpec;
 use crate::rule::Rule;
-use crate::servo::FrictionModel;
 
 /// Which friction model the feedforward compensator simulates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -447,7 +447,7 @@ impl CompensationSettings {
                         ),
                     ));
                 }
-                FrictionModel::unset(kind)
+                unset_model(kind)
             }
         };
         for (name, value) in &self.values {
@@ -476,5 +476,25 @@ impl CompensationSettings {
             )
         })?;
         Ok(model)
+    }
+}
+
+/// A model of `kind` with every parameter unset (NaN), to be filled.
+fn unset_model(kind: CompensationKind) -> FrictionModel {
+    let nan = f64::NAN;
+    match kind {
+        CompensationKind::Lugre => FrictionModel::Lugre(LugreParams {
+            sigma0: nan,
+            sigma1: nan,
+            sigma2: nan,
+            f_c: nan,
+            f_s: nan,
+            v_s: nan,
+        }),
+        CompensationKind::Dahl => FrictionModel::Dahl(DahlParams {
+            sigma: nan,
+            f_c: nan,
+            exponent: nan,
+        }),
     }
 }

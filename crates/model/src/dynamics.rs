@@ -25,7 +25,7 @@ use crate::laws::{
 use crate::reference::ReferenceSample;
 use crate::rooted::RootedScratch;
 use crate::scalar::Scalar;
-use crate::servo::ServoValues;
+use crate::values::ServoValues;
 pub use crate::values::{ElementValues, InputValues};
 
 /// How [`crate::Model::rhs`] evaluates a model; every path gives the same state

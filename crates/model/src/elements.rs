@@ -2,13 +2,16 @@
 //! the world, force elements attached to them, the servo controller, the
 //! named state layout and output signals, and the inputs it is driven by.
 //! `Structure` holds them for every evaluation path; [`crate::Model`]
-//! wraps it with the evaluator chosen for it.
+//! wraps it with the evaluator chosen for it. The servo's parts are data
+//! here (its compensators' friction models, feedforward, virtual bearing and
+//! observer); their law is `servo.rs`.
 
 use nalgebra::{Isometry3, Matrix3, Vector3};
 
+use crate::dahl::DahlParams;
 use crate::lugre::LugreParams;
 use crate::reference::ReferenceSample;
-use crate::servo::{Feedforward, Observer};
+use crate::scalar::Scalar;
 
 /// What a force element or sensor is attached to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -434,4 +437,152 @@ impl Structure {
         }
         x
     }
+}
+
+/// A friction model a compensator simulates.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FrictionModel {
+    /// LuGre; the state is the compensator's bristle deflection, m.
+    Lugre(LugreParams),
+    /// Dahl; the state is the friction force, N.
+    Dahl(DahlParams),
+}
+
+impl FrictionModel {
+    /// A parameter by name (NaN for a name the model does not have).
+    pub fn get(&self, name: &str) -> f64 {
+        match self {
+            Self::Lugre(p) => LugreParams::key(name).map_or(f64::NAN, |k| k.get(p)),
+            Self::Dahl(p) => DahlParams::key(name).map_or(f64::NAN, |k| k.get(p)),
+        }
+    }
+
+    /// Sets a parameter by name (a name the model does not have is ignored).
+    pub fn set(&mut self, name: &str, value: f64) {
+        match self {
+            Self::Lugre(p) => {
+                if let Some(k) = LugreParams::key(name) {
+                    k.set(p, value);
+                }
+            }
+            Self::Dahl(p) => {
+                if let Some(k) = DahlParams::key(name) {
+                    k.set(p, value);
+                }
+            }
+        }
+    }
+
+    /// The first parameter that breaks a rule: (name, what it must be).
+    pub fn validate(&self) -> Result<(), (&'static str, String)> {
+        match self {
+            Self::Lugre(p) => p.validate().map_err(|e| {
+                let message = e.to_string();
+                let tail = message.strip_prefix(e.name).unwrap_or(&message).trim();
+                (e.name, tail.to_string())
+            }),
+            Self::Dahl(p) => p.validate(),
+        }
+    }
+
+    /// The model as felt through an isolator of stiffness `k_j` and damping
+    /// `c_j` along the contact axis, the bearing's mass neglected (paper
+    /// Section 2.1). In pre-motion the contact is a spring and damper
+    /// (`sigma0`, `sigma1`) in series with the isolator's (`k_j`, `c_j`); at
+    /// low frequency the pair acts as the stiffness
+    /// `k_c = sigma0 k_j / (sigma0 + k_j)` (Eq. 1) and the damping
+    /// `(sigma1 k_j^2 + c_j sigma0^2) / (sigma0 + k_j)^2`. Sliding forces
+    /// (`f_c`, `f_s`, `v_s`, `sigma2`) pass through the isolator unchanged.
+    /// A Dahl model's stiffness combines the same way.
+    pub fn felt_through(&self, k_j: f64, c_j: f64) -> Self {
+        let series = |k: f64| k * k_j / (k + k_j);
+        match *self {
+            Self::Lugre(p) => {
+                let total = p.sigma0 + k_j;
+                Self::Lugre(LugreParams {
+                    sigma0: series(p.sigma0),
+                    sigma1: (p.sigma1 * k_j * k_j + c_j * p.sigma0 * p.sigma0) / (total * total),
+                    ..p
+                })
+            }
+            Self::Dahl(p) => Self::Dahl(DahlParams {
+                sigma: series(p.sigma),
+                ..p
+            }),
+        }
+    }
+
+    /// The friction force the model predicts at velocity `v` and internal
+    /// state `w`, and the state's rate.
+    #[inline(always)]
+    pub(crate) fn force_and_rate<S: Scalar>(&self, v: S, w: S) -> (S, S) {
+        match self {
+            Self::Lugre(p) => p.force_and_z_rate_of(v, w),
+            Self::Dahl(p) => (w, p.force_rate_of(v, w)),
+        }
+    }
+
+    /// What its state is, its name suffix and its typical size.
+    pub(crate) fn state(&self) -> (StateKind, &'static str, f64) {
+        match self {
+            Self::Lugre(p) => (StateKind::CompensatorBristle, "z", p.f_s / p.sigma0),
+            Self::Dahl(p) => (StateKind::CompensatorForce, "f_d", p.f_c),
+        }
+    }
+}
+
+/// Feedforward friction compensation: a friction model driven by the
+/// reference, simulated with its own state.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Feedforward {
+    /// The name of the friction element it models, when it models one.
+    pub element: Option<String>,
+    /// The friction model simulated (already felt through the isolator when
+    /// the isolator is treated statically).
+    pub model: FrictionModel,
+    /// The bearing behind the isolator, when it is simulated dynamically.
+    pub bearing: Option<VirtualBearing>,
+    /// Index of the compensator's first state: the model's state, or with a
+    /// virtual bearing the isolator deflection, then the bearing velocity,
+    /// then the model's state.
+    pub state_index: usize,
+}
+
+/// The bearing a compensator simulates behind an isolator: its mass and the
+/// isolator's stiffness and damping along the contact axis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VirtualBearing {
+    /// Bearing mass m_b, kg.
+    pub mass: f64,
+    /// Isolator stiffness k_j along the contact axis, N/m.
+    pub stiffness: f64,
+    /// Isolator damping c_j along the contact axis, N s/m.
+    pub damping: f64,
+}
+
+impl Feedforward {
+    /// Number of states it has.
+    pub fn n_states(&self) -> usize {
+        if self.bearing.is_some() { 3 } else { 1 }
+    }
+
+    /// The index of its LuGre model's bristle state, which an
+    /// implicit-explicit integrator may treat implicitly (none for Dahl).
+    pub fn bristle_state(&self) -> Option<usize> {
+        match self.model {
+            FrictionModel::Lugre(_) => Some(self.state_index + self.n_states() - 1),
+            FrictionModel::Dahl(_) => None,
+        }
+    }
+}
+
+/// A disturbance observer with a first-order Q-filter.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Observer {
+    /// Nominal mass m_n, kg.
+    pub nominal_mass: f64,
+    /// Q-filter cut-off omega, rad/s (2 pi times the bandwidth in Hz).
+    pub cutoff: f64,
+    /// Index of the observer state eta in the state vector.
+    pub state_index: usize,
 }

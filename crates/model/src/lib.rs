@@ -117,4 +117,4 @@ pub use scenario::{
     ControllerSettings, EngineKind, Gain, OutputFormat, Override, PayloadSettings, RapierSettings,
     Scenario, SolverSettings, Start, StopSettings,
 };
-pub use servo::ServoValues;
+pub use values::ServoValues;

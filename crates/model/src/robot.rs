@@ -25,7 +25,7 @@
 
 use crate::error::LoadError;
 use crate::lugre::LugreParams;
-use crate::rule::Rule;
+use crate::rule::{Rule, check_name};
 use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
@@ -377,33 +377,6 @@ fn check_nesting(text: &str) -> Result<(), String> {
             }
             _ => i += 1,
         }
-    }
-    Ok(())
-}
-
-/// The longest name a link, joint or element may have.
-const MAX_NAME_LENGTH: usize = 128;
-
-/// Characters that would break a CSV header (`name [unit]`), a parameter
-/// path or an FMI name.
-const FORBIDDEN_IN_NAMES: &[char] = &[',', ';', '"', '\'', '[', ']', '{', '}', '<', '>', '=', '\\'];
-
-/// Why a name cannot serve as a signal, CSV and FMI name, if it cannot.
-pub fn check_name(name: &str) -> Result<(), String> {
-    if name.is_empty() {
-        return Err("empty".into());
-    }
-    if name.chars().count() > MAX_NAME_LENGTH {
-        return Err(format!("longer than {MAX_NAME_LENGTH} characters"));
-    }
-    if name.trim() != name {
-        return Err("leading or trailing white space".into());
-    }
-    if let Some(c) = name
-        .chars()
-        .find(|c| c.is_control() || FORBIDDEN_IN_NAMES.contains(c))
-    {
-        return Err(format!("contains {c:?}"));
     }
     Ok(())
 }

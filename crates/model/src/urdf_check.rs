@@ -10,8 +10,8 @@
 use std::path::Path;
 
 use crate::error::LoadError;
-use crate::robot::check_name;
 use crate::rule::MAX_MAGNITUDE;
+use crate::rule::check_name;
 
 /// Joint types of the URDF specification.
 const JOINT_TYPES: [&str; 6] = [

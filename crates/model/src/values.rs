@@ -1,10 +1,10 @@
 //! The values one evaluation works with in any scalar type: the inputs
-//! ([`InputValues`]) and what each force element gave ([`ElementValues`]).
+//! ([`InputValues`]), what each force element gave ([`ElementValues`]) and
+//! what the servo law gave besides its force ([`ServoValues`]).
 
 use crate::elements::Inputs;
 use crate::reference::ReferenceSample;
 use crate::scalar::Scalar;
-use crate::servo::ServoValues;
 
 /// Model inputs in any scalar type (see [`Inputs`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -56,4 +56,31 @@ pub struct ElementValues<S = f64> {
     pub reference: ReferenceSample,
     /// The servo's tracking error, compensator values and state rates.
     pub servo: ServoValues<S>,
+}
+
+/// What the servo law gives besides its force: the tracking error, the
+/// compensators' contributions, and the rates of the servo's own states in
+/// the order integral, feedforward, observer.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ServoValues<S> {
+    /// Tracking error x - x_r, m.
+    pub error: S,
+    /// Feedforward friction compensation force, N.
+    pub feedforward: S,
+    /// Disturbance estimate d_hat, N.
+    pub estimate: S,
+    /// Rates of the integral, the feedforward states and the observer state.
+    pub(crate) rates: [S; 5],
+}
+
+impl<S: Scalar> ServoValues<S> {
+    /// All zero.
+    pub fn zero() -> Self {
+        Self {
+            error: S::zero(),
+            feedforward: S::zero(),
+            estimate: S::zero(),
+            rates: [S::zero(); 5],
+        }
+    }
 }

@@ -26,7 +26,7 @@ pub fn hidden() -> Option<String> {
 use fistage_model::Loaded;
 use fistage_sim::{ScenarioExcitation, SimSettings, StepCounts, Trajectory, initial_state};
 
-use crate::bench::{median, thread_cpu_time};
+use crate::timing::{median, thread_cpu_time};
 
 /// One peer's timed run at one tolerance.
 pub struct PeerRun {

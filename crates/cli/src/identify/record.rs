@@ -25,7 +25,7 @@ use fistage_ident::record::{
 use fistage_ident::{Loss, Quantity, UnitOverrides};
 use fistage_plot::{Figure, Panel, Series, write_figure};
 
-use crate::identify::{
+use super::shared::{
     OutputArgs, SimulateArgs, check_element, nothing_written, print_report, refuse_undetermined,
     short_name, unit_flag,
 };
