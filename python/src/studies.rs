@@ -8,6 +8,7 @@
 
 use std::path::{Path, PathBuf};
 
+use fistage_analysis::assess::worker_threads;
 use fistage_analysis::robust::{RobustSpec, Summary, table};
 use fistage_analysis::sweep::{SweepSpec, header, row, run_points};
 use fistage_model::{Loaded, RobotSpec};
@@ -39,12 +40,9 @@ fn in_chunks<T: Send>(
     Ok(results)
 }
 
+/// The program's rule for `--threads` ([`worker_threads`]).
 fn threads_or_all(threads: Option<usize>) -> PyResult<usize> {
-    match threads {
-        Some(0) => Err(Error::new_err("threads must be at least 1")),
-        Some(n) => Ok(n),
-        None => Ok(std::thread::available_parallelism().map_or(1, |n| n.get())),
-    }
+    worker_threads(threads).map_err(Error::new_err)
 }
 
 /// The `[sweep]` grid: `points.csv` as text.

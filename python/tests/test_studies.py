@@ -101,3 +101,11 @@ def test_study_keeps_a_refused_samples_reason():
     assert study.points[1]["refused"] == "f_s must be >= f_c"
     assert study.points[0]["stable_linear"] is True and study.points[1]["stable_linear"] is None
     assert numpy.isnan(study["max_real_eig"][1]) and study["max_real_eig"][0] == -3.5
+
+
+@pytest.mark.parametrize("threads", [0, 1025, 100000])
+def test_threads_follow_the_programs_rule(root, threads):
+    # The program refuses --threads outside 1..1024; the package refuses the
+    # same values by the same rule, before starting any thread.
+    with pytest.raises(fistage.Error, match="threads must be from 1 to 1024"):
+        small_sweep(root).sweep(threads=threads)

@@ -344,6 +344,11 @@ def classify(case, res, before):
         low = res.stderr.lower()
         hit = [n for n in case.needles if n.lower() in low]
         first = first_line(res.stderr)
+        # A number nobody can read (1e-300 printed in full decimal) makes
+        # an error unclear whatever else it names.
+        long_number = re.search(r"\d[\d.]{40,}", res.stderr)
+        if long_number:
+            return "unclear error", "%s (a number of %d digits)" % (first[:120], len(long_number.group(0)))
         if hit:
             return "clear error", first
         return "unclear error", "%s (no mention of %s)" % (first, " / ".join(map(repr, case.needles[:4])))

@@ -114,6 +114,20 @@ impl Assessment {
     }
 }
 
+/// The most worker threads a study takes: the program's `--threads` and the
+/// Python package's `threads=` share this limit.
+pub const MAX_THREADS: usize = 1024;
+
+/// The worker threads of a study: `requested` when it is from 1 to
+/// [`MAX_THREADS`], every core when none is requested, else why not.
+pub fn worker_threads(requested: Option<usize>) -> Result<usize, String> {
+    match requested {
+        None => Ok(std::thread::available_parallelism().map_or(1, |n| n.get())),
+        Some(n) if (1..=MAX_THREADS).contains(&n) => Ok(n),
+        Some(n) => Err(format!("threads must be from 1 to {MAX_THREADS}, got {n}")),
+    }
+}
+
 /// Evaluates `evaluate(index)` for every index on `threads` threads, in
 /// index order; `done` is called with each result as it finishes (from
 /// worker threads, in completion order) and the count finished so far.

@@ -56,7 +56,7 @@ impl RecordLab {
         if !(self.dt > 0.0 && self.dt.is_finite()) {
             return Err(IdentError::InvalidOption(format!(
                 "the sample interval must be positive, got {}",
-                self.dt
+                fistage_model::rule::show(self.dt)
             )));
         }
         let friction = stage.friction();

@@ -63,7 +63,7 @@ pub fn run(args: &FmuArgs) -> anyhow::Result<()> {
         std::fs::create_dir_all(folder)
             .with_context(|| format!("cannot create {}", folder.display()))?;
     }
-    std::fs::write(&args.output, &bytes)
+    fistage_model::output::write_whole(&args.output, &bytes)
         .with_context(|| format!("cannot write {}", args.output.display()))?;
     println!(
         "{}: FMI {}.0 FMU (Model Exchange and Co-Simulation), {:.1} MB (library {})",

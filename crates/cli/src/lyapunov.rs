@@ -36,7 +36,8 @@ pub fn run(args: &LyapunovArgs) -> anyhow::Result<()> {
     ] {
         anyhow::ensure!(
             value.is_finite() && value >= 0.0,
-            "{name} must be >= 0, got {value}"
+            "{name} must be >= 0, got {}",
+            fistage_model::rule::show(value)
         );
     }
     anyhow::ensure!(

@@ -65,7 +65,37 @@ enum Command {
     Man(shell::ManArgs),
 }
 
-fn main() -> anyhow::Result<()> {
+/// Runs the command; an error is printed as its chain of causes (never a
+/// backtrace, whatever `RUST_BACKTRACE` says: the message is for the user)
+/// and the program exits with status 1.
+fn main() -> std::process::ExitCode {
+    match run_command() {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(error) => {
+            eprintln!("Error: {}", report(&error));
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+/// An error and its causes as anyhow prints them, without the backtrace.
+fn report(error: &anyhow::Error) -> String {
+    let mut text = error.to_string();
+    let causes: Vec<String> = error.chain().skip(1).map(ToString::to_string).collect();
+    match causes.as_slice() {
+        [] => {}
+        [cause] => text.push_str(&format!("\n\nCaused by:\n    {cause}")),
+        _ => {
+            text.push_str("\n\nCaused by:");
+            for (i, cause) in causes.iter().enumerate() {
+                text.push_str(&format!("\n    {i}: {cause}"));
+            }
+        }
+    }
+    text
+}
+
+fn run_command() -> anyhow::Result<()> {
     // Written into a pipe that closes early (`fistage check x.toml | head -1`),
     // end quietly as other Unix programs do instead of panicking on EPIPE.
     // SAFETY: restoring the default disposition of SIGPIPE before any thread

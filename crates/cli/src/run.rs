@@ -59,7 +59,8 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     if let Some(dt) = args.dt {
         anyhow::ensure!(
             dt > 0.0 && dt.is_finite(),
-            "--dt must be positive, got {dt}"
+            "--dt must be positive, got {}",
+            fistage_model::rule::show(dt)
         );
         loaded.scenario.rapier.dt = Some(dt);
     }

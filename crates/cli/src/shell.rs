@@ -34,8 +34,27 @@ pub fn completions(args: &CompletionsArgs, mut command: clap::Command) -> anyhow
 pub fn man(args: &ManArgs, command: clap::Command) -> anyhow::Result<()> {
     let out = args.out.clone().unwrap_or_else(|| PathBuf::from("out/man"));
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
-    clap_mangen::generate_to(command, &out)
-        .with_context(|| format!("cannot write the man pages into {}", out.display()))?;
+    // The pages are made in a folder beside `out` and each moved over its
+    // earlier version only when all are written: a failure leaves the
+    // earlier pages as they were.
+    let staging = out
+        .canonicalize()
+        .and_then(|folder| fistage_model::output::partial_beside(&folder))
+        .with_context(|| format!("cannot write into {}", out.display()))?;
+    let made = std::fs::create_dir(&staging)
+        .and_then(|()| clap_mangen::generate_to(command, &staging))
+        .and_then(|()| move_pages(&staging, &out));
+    let _ = std::fs::remove_dir_all(&staging);
+    made.with_context(|| format!("cannot write the man pages into {}", out.display()))?;
     println!("wrote the man pages into {}", out.display());
+    Ok(())
+}
+
+/// Moves every page of `staging` into `out`, each replacing its namesake.
+fn move_pages(staging: &std::path::Path, out: &std::path::Path) -> std::io::Result<()> {
+    for entry in std::fs::read_dir(staging)? {
+        let entry = entry?;
+        std::fs::rename(entry.path(), out.join(entry.file_name()))?;
+    }
     Ok(())
 }

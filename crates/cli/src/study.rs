@@ -16,6 +16,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 use anyhow::{Context, bail};
+use fistage_analysis::assess::{MAX_THREADS, worker_threads};
 
 use crate::output::{OutputFolder, holds_files};
 use crate::progress;
@@ -58,8 +59,8 @@ pub struct StudyArgs {
     #[arg(long)]
     pub merge: Vec<PathBuf>,
     /// Worker threads (default: all cores; at most 1024).
-    #[arg(long, value_parser = clap::value_parser!(u16).range(1..=1024))]
-    pub threads: Option<u16>,
+    #[arg(long, value_parser = threads_flag)]
+    pub threads: Option<usize>,
     /// Recompute items already in the output folder or its journal.
     #[arg(long)]
     pub no_resume: bool,
@@ -269,10 +270,7 @@ fn compute<S: Study>(
     let partial = Mutex::new(partial);
     let bar = progress::bar(&format!("{} {}", todo.len(), S::ITEMS));
     let total = todo.len().max(1);
-    let threads = args
-        .threads
-        .map(usize::from)
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let threads = worker_threads(args.threads).map_err(|why| anyhow::anyhow!("--{why}"))?;
     let new = study.compute(&todo, threads, &|row, done| {
         if let Ok(mut file) = partial.lock() {
             // A failed write only costs the resume of this item.
@@ -295,4 +293,12 @@ fn clear(journal: &Path) -> anyhow::Result<()> {
         std::fs::remove_file(&path).with_context(|| format!("cannot remove {}", path.display()))?;
     }
     Ok(())
+}
+
+/// `--threads`: a whole number the library's rule admits.
+fn threads_flag(text: &str) -> Result<usize, String> {
+    let n: usize = text
+        .parse()
+        .map_err(|_| format!("must be a whole number from 1 to {MAX_THREADS}"))?;
+    worker_threads(Some(n)).map(|_| n)
 }

@@ -63,11 +63,17 @@ fn settings(args: &TuneArgs) -> anyhow::Result<TuneSettings> {
         bail!("--points must be from 2 to 200, got {}", args.points);
     }
     if !(args.margin.is_finite() && args.margin >= 0.0) {
-        bail!("--margin must be >= 0 (1/s), got {}", args.margin);
+        bail!(
+            "--margin must be >= 0 (1/s), got {}",
+            fistage_model::rule::show(args.margin)
+        );
     }
     let criterion = match args.p_target {
         Some(p) if p > 0.0 && p < 1.0 => Criterion::Probability(p),
-        Some(p) => bail!("--p-target must be between 0 and 1, got {p}"),
+        Some(p) => bail!(
+            "--p-target must be between 0 and 1, got {}",
+            fistage_model::rule::show(p)
+        ),
         None => Criterion::Margin(args.margin),
     };
     Ok(TuneSettings {

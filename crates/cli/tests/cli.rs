@@ -1523,3 +1523,62 @@ fn bench_peers_agree_with_the_native_engine() {
     }
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// Numbers in errors are readable: a refused flag value far from 1 is shown
+/// in exponent form, never as hundreds of digits of full decimal; the
+/// threads of a study are checked by the library's rule the Python package
+/// uses too.
+#[test]
+fn refused_numbers_are_shown_readably() {
+    let scenario = repository().join("scenarios/paper/fig05b_fi.toml");
+    for (flag, value, shown) in [
+        ("--rtol", "1e-300", "1e-300"),
+        ("--rtol", "1e300", "1e300"),
+        ("--dt=-1e-300", "", "-1e-300"),
+    ] {
+        // A negative value goes with its flag (`--dt=-1e-300`), else it
+        // reads as a flag of its own.
+        let words: Vec<&str> = [flag, value]
+            .into_iter()
+            .filter(|w| !w.is_empty())
+            .collect();
+        let output = fistage()
+            .arg("run")
+            .arg(&scenario)
+            .args(&words)
+            .arg("--out")
+            .arg(scratch("readable-numbers"))
+            .output()
+            .expect("fistage runs");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        let name = flag.split('=').next().unwrap_or(flag);
+        assert!(!output.status.success(), "{flag} {value}: {stderr}");
+        assert!(
+            stderr.contains(name) && stderr.contains(shown),
+            "{flag} {value}: {stderr}"
+        );
+        assert!(!stderr.contains("backtrace"), "{flag} {value}: {stderr}");
+        let longest_number = stderr
+            .split(|c: char| !(c.is_ascii_digit() || c == '.'))
+            .map(str::len)
+            .max()
+            .unwrap_or(0);
+        assert!(longest_number < 20, "{flag} {value}: {stderr}");
+    }
+    let sweep = repository().join("scenarios/paper/fig06b_fi_vp20.toml");
+    for threads in ["0", "1025", "100000"] {
+        let output = fistage()
+            .arg("sweep")
+            .arg(&sweep)
+            .args(["--threads", threads, "--out"])
+            .arg(scratch("threads"))
+            .output()
+            .expect("fistage runs");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(!output.status.success(), "--threads {threads}");
+        assert!(
+            stderr.contains("from 1 to 1024"),
+            "--threads {threads}: {stderr}"
+        );
+    }
+}

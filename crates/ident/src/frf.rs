@@ -147,7 +147,10 @@ impl FrfData {
         if !(w > 0.0 && w.is_finite()) {
             return Err(cell(
                 &self.frequency_column,
-                format!("frequency must be > 0, got {w} rad/s"),
+                format!(
+                    "frequency must be > 0, got {} rad/s",
+                    fistage_model::rule::show(w)
+                ),
             ));
         }
         let g = self.response[i];
@@ -156,7 +159,8 @@ impl FrfData {
                 &self.response_column,
                 format!(
                     "response must be finite and nonzero, got {} + {}j m/N",
-                    g.re, g.im
+                    fistage_model::rule::show(g.re),
+                    fistage_model::rule::show(g.im)
                 ),
             ));
         }
@@ -232,7 +236,8 @@ impl FrfOptions {
                 Ok(())
             } else {
                 Err(IdentError::InvalidOption(format!(
-                    "{name} must be a positive number, got {x}"
+                    "{name} must be a positive number, got {}",
+                    fistage_model::rule::show(x)
                 )))
             }
         };
@@ -243,7 +248,7 @@ impl FrfOptions {
             if !(s.value >= 0.0 && s.value.is_finite()) {
                 return Err(IdentError::InvalidOption(format!(
                     "sigma2 must be a number >= 0, got {}",
-                    s.value
+                    fistage_model::rule::show(s.value)
                 )));
             }
             if let Some([lo, hi]) = s.ci95

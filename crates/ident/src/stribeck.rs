@@ -262,7 +262,8 @@ impl StribeckOptions {
     fn check(&self) -> Result<()> {
         let positive = |name: &str, v: Option<f64>| match v {
             Some(x) if !(x > 0.0 && x.is_finite()) => Err(IdentError::InvalidOption(format!(
-                "{name} must be a positive number, got {x}"
+                "{name} must be a positive number, got {}",
+                fistage_model::rule::show(x)
             ))),
             _ => Ok(()),
         };
@@ -277,7 +278,7 @@ impl StribeckOptions {
         if !(self.alpha > 0.0 && self.alpha < 1.0) {
             return Err(IdentError::InvalidOption(format!(
                 "alpha must be in (0, 1), got {}",
-                self.alpha
+                fistage_model::rule::show(self.alpha)
             )));
         }
         Ok(())

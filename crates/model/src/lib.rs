@@ -83,6 +83,7 @@ pub mod lugre;
 pub mod mat;
 pub mod model;
 pub mod native;
+pub mod output;
 pub mod parameter;
 pub mod reference;
 pub mod robot;

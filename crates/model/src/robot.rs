@@ -400,7 +400,7 @@ fn link_spec(link: &urdf_rs::Link, file: &Path) -> Result<LinkSpec, LoadError> {
         return Err(LoadError::robot(
             file,
             element,
-            format!("mass must be >= 0, got {mass}"),
+            format!("mass must be >= 0, got {}", crate::rule::show(mass)),
         ));
     }
     if mass > 0.0 && !crate::rule::Rule::Positive.admits(mass) {

@@ -299,7 +299,10 @@ impl SolverSettings {
         if rtol.is_finite() && (MIN_RTOL..0.1).contains(&rtol) {
             Ok(())
         } else {
-            Err(format!("must be >= {MIN_RTOL:e} and < 0.1, got {rtol}"))
+            Err(format!(
+                "must be >= {MIN_RTOL:e} and < 0.1, got {}",
+                crate::rule::show(rtol)
+            ))
         }
     }
 }
@@ -730,7 +733,10 @@ impl Checker<'_> {
             if !(0.0..=1.0).contains(&stop.restitution) {
                 return Err(self.error(
                     &format!("{key}.restitution"),
-                    format!("must be in [0, 1], got {}", stop.restitution),
+                    format!(
+                        "must be in [0, 1], got {}",
+                        crate::rule::show(stop.restitution)
+                    ),
                 ));
             }
         }

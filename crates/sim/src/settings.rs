@@ -145,7 +145,8 @@ pub(crate) fn check_settings(
             Ok(())
         } else {
             Err(SimError::InvalidSettings(format!(
-                "{name} must be > 0, got {v}"
+                "{name} must be > 0, got {}",
+                fistage_model::rule::show(v)
             )))
         }
     };

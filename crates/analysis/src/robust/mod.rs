@@ -387,7 +387,10 @@ fn distribution_of(
         if v > 0.0 {
             Ok(v)
         } else {
-            Err((field, format!("must be > 0, got {v}")))
+            Err((
+                field,
+                format!("must be > 0, got {}", fistage_model::rule::show(v)),
+            ))
         }
     };
     let ordered = |low: f64, high: f64| {

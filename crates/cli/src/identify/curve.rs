@@ -140,7 +140,11 @@ pub(super) struct FrfArgs {
 /// `lo < hi`, both positive and finite, at least two points.
 fn check_range(name: &str, lo: f64, hi: f64, points: usize) -> Result<()> {
     if !(lo > 0.0 && lo.is_finite() && hi.is_finite() && lo < hi) {
-        bail!("--{name}-min and --{name}-max must satisfy 0 < min < max, got {lo} and {hi}");
+        bail!(
+            "--{name}-min and --{name}-max must satisfy 0 < min < max, got {} and {}",
+            fistage_model::rule::show(lo),
+            fistage_model::rule::show(hi)
+        );
     }
     if points < 2 {
         bail!("--points must be at least 2, got {points}");
@@ -189,7 +193,7 @@ pub(super) fn simulate_frf(args: &SimulateFrfArgs) -> Result<()> {
     if !(args.amplitude > 0.0 && args.amplitude.is_finite()) {
         bail!(
             "--amplitude must be a positive number, got {}",
-            args.amplitude
+            fistage_model::rule::show(args.amplitude)
         );
     }
     let common = &args.common;
@@ -240,8 +244,10 @@ fn known_unit(quantity: Quantity, name: &str) -> Unit {
     Unit::parse(quantity, name).unwrap_or_else(|| panic!("{name} is a {quantity} unit"))
 }
 
+/// Writes a data file whole or not at all (an earlier file stays on failure).
 fn write_file(path: &Path, text: &str) -> Result<()> {
-    std::fs::write(path, text).with_context(|| format!("{}: cannot write", path.display()))
+    fistage_model::output::write_whole(path, text.as_bytes())
+        .with_context(|| format!("{}: cannot write", path.display()))
 }
 
 pub(super) fn run_stribeck(args: &StribeckArgs) -> Result<()> {

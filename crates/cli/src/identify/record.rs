@@ -267,11 +267,17 @@ pub fn simulate_record(args: &SimulateRecordArgs) -> Result<()> {
         ("--disturbance", args.disturbance),
     ] {
         if !(value.is_finite() && value >= 0.0) {
-            bail!("{flag} must be a number >= 0, got {value}");
+            bail!(
+                "{flag} must be a number >= 0, got {}",
+                fistage_model::rule::show(value)
+            );
         }
     }
     if !(args.rate.is_finite() && args.rate > 0.0 && args.rate <= 1e7) {
-        bail!("--rate must be in (0, 1e7] Hz, got {}", args.rate);
+        bail!(
+            "--rate must be in (0, 1e7] Hz, got {}",
+            fistage_model::rule::show(args.rate)
+        );
     }
     let common = &args.common;
     let stage = LabStage::load(&common.stage)?;
@@ -291,7 +297,10 @@ pub fn simulate_record(args: &SimulateRecordArgs) -> Result<()> {
     if let Some(d) = args.duration
         && !(d.is_finite() && d > 0.0)
     {
-        bail!("--duration must be a positive number of s, got {d}");
+        bail!(
+            "--duration must be a positive number of s, got {}",
+            fistage_model::rule::show(d)
+        );
     }
     let (record, segments) = if args.closed_loop {
         (
@@ -323,7 +332,7 @@ pub fn simulate_record(args: &SimulateRecordArgs) -> Result<()> {
             .unwrap_or(record.time[record.len() - 1]);
         table += &format!("{},{},{}\n", record.time[s.start], end, s.kind);
     }
-    std::fs::write(&segments_path, table)
+    fistage_model::output::write_whole(&segments_path, table.as_bytes())
         .with_context(|| format!("{}: cannot write", segments_path.display()))?;
     println!(
         "wrote {} samples ({:.2} s at {} Hz) to {} and its segments to {}",
@@ -367,7 +376,7 @@ fn write_record(path: &Path, record: &Record) -> Result<()> {
                 ("x_m", &record.position),
             ],
         )
-        .and_then(|()| std::fs::write(path, bytes))
+        .and_then(|()| fistage_model::output::write_whole(path, &bytes))
     } else {
         let mut text = String::from("t_s,f_servo_N,x_m\n");
         for k in 0..record.len() {
@@ -376,7 +385,7 @@ fn write_record(path: &Path, record: &Record) -> Result<()> {
                 record.time[k], record.force[k], record.position[k]
             );
         }
-        std::fs::write(path, text)
+        fistage_model::output::write_whole(path, text.as_bytes())
     };
     result.with_context(|| format!("{}: cannot write", path.display()))
 }

@@ -193,7 +193,8 @@ pub fn fit_record(
         && !(h.is_finite() && h > 0.0)
     {
         return Err(IdentError::InvalidOption(format!(
-            "the horizon must be a positive number of seconds, got {h}"
+            "the horizon must be a positive number of seconds, got {}",
+            fistage_model::rule::show(h)
         )));
     }
     if !(options.rtol >= 1e-14 && options.rtol < 1e-2) {
@@ -206,7 +207,8 @@ pub fn fit_record(
         MassChoice::Known(m) if m.is_finite() && m > 0.0 => Some(m),
         MassChoice::Known(m) => {
             return Err(IdentError::InvalidOption(format!(
-                "the mass must be a positive number of kg, got {m}"
+                "the mass must be a positive number of kg, got {}",
+                fistage_model::rule::show(m)
             )));
         }
         MassChoice::Fit => None,
