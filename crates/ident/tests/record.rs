@@ -73,6 +73,32 @@ fn starts_fifty_percent_off_give_the_same_answer() {
     }
 }
 
+/// The fit does not depend on the time origin: the same record on a lab's
+/// clock that stood at 1e4 s (where the smallest step relative to the time
+/// once refused the steps of a breakaway) gives the fit of the record from 0.
+#[test]
+fn a_lab_clock_far_from_zero_gives_the_same_fit() {
+    let (record, _) = RecordSynth::new(LugreParams::paper_table1(), 1.5)
+        .generate()
+        .unwrap();
+    let reference = fit_record(&record, &RecordOptions::default(), &mut |_| true).unwrap();
+    for origin in [1e4, 1e6] {
+        let mut shifted = record.clone();
+        for t in &mut shifted.time {
+            *t += origin;
+        }
+        let fit = fit_record(&shifted, &RecordOptions::default(), &mut |_| true)
+            .unwrap_or_else(|e| panic!("clock at {origin:e} s: {e}"));
+        let (worst, name) = worst_relative(&fit.theta, &reference.theta);
+        // The shifted times carry the round-off of the addition (1e-16 of
+        // the origin), a sub-nanosecond jitter of the samples.
+        assert!(
+            worst < 1e-4,
+            "clock at {origin:e} s: {name} off by {worst:e}"
+        );
+    }
+}
+
 /// The fit does not depend on the plant tolerance: 1e-8 and 1e-10 agree to
 /// well inside the 0.2% asked of a clean record.
 #[test]

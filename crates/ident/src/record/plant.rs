@@ -180,6 +180,11 @@ struct SensitivitySystem<'a> {
     servo: Option<&'a ServoLoop>,
     /// States before sensitivities.
     base: usize,
+    /// The record's first time, s: the integration runs on the time since
+    /// it, so a fit does not depend on where a lab's clock stood (the
+    /// smallest step is relative to the time, and a clock at 1e4 s would
+    /// refuse the steps a breakaway needs).
+    time_origin: f64,
 }
 
 impl SensitivitySystem<'_> {
@@ -192,7 +197,7 @@ impl SensitivitySystem<'_> {
                 dy[..PLANT_STATES].copy_from_slice(&r);
             }
             Some(servo) => {
-                let (force, values) = servo.force(t, y);
+                let (force, values) = servo.force(self.time_origin + t, y);
                 let r = rates(theta, force, y[1], y[2], servo.platform_velocity);
                 dy[..PLANT_STATES].copy_from_slice(&r);
                 servo.write_rates(&values, dy);
@@ -325,6 +330,7 @@ pub fn simulate(
         force: record.force[0],
         servo: drive.servo(),
         base: nb,
+        time_origin: record.time[0],
     };
     let dim = system.dim();
     let mut y0 = vec![0.0; dim];
@@ -356,25 +362,29 @@ pub fn simulate(
         jacobian: Vec::with_capacity(n * p),
         rhs_evaluations: 0,
     };
+    let origin = record.time[0];
     let t_end = record.time[n - 1];
-    let breakpoints = drive
-        .servo()
-        .map_or_else(Vec::new, |s| s.breakpoints(record.time[0], t_end));
+    let breakpoints: Vec<f64> = drive.servo().map_or_else(Vec::new, |s| {
+        s.breakpoints(origin, t_end)
+            .into_iter()
+            .map(|b| b - origin)
+            .collect()
+    });
     let mut next_breakpoint = breakpoints.iter().copied().peekable();
-    let mut integrator = DormandPrince::new(&mut system, record.time[0], &y0, tol);
+    let mut integrator = DormandPrince::new(&mut system, 0.0, &y0, tol);
     let mut next_anchor = anchors.samples.iter().copied().peekable();
     for k in 0..n {
         if k > 0 {
-            let t_stop = record.time[k];
+            let t_stop = record.time[k] - origin;
             while integrator.t < t_stop {
                 let target = next_breakpoint
                     .peek()
                     .copied()
                     .filter(|&b| b <= t_stop)
                     .unwrap_or(t_stop);
-                integrator
-                    .step(&mut system, target)
-                    .map_err(|failure| simulation_failed(record, theta, integrator.t, failure))?;
+                integrator.step(&mut system, target).map_err(|failure| {
+                    simulation_failed(record, theta, origin + integrator.t, failure)
+                })?;
                 if integrator.t >= target && next_breakpoint.peek() == Some(&target) {
                     next_breakpoint.next();
                     integrator.restart(&mut system);
