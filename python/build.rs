@@ -1,12 +1,28 @@
 //! Builds the FMU's shared library (`fistage-fmi`, from the main workspace)
 //! so that `Scenario.export_fmu` needs nothing beside the installed
 //! package: the library's bytes are embedded in the extension module.
+//! `FISTAGE_FMI_LIBRARY` names a library built already (from this
+//! checkout) to embed instead.
 
 use std::env;
 use std::path::PathBuf;
 use std::process::Command;
 
 fn main() {
+    println!("cargo:rerun-if-env-changed=FISTAGE_FMI_LIBRARY");
+    // A library already built from this checkout (CI builds it with the
+    // tests and names it here) is embedded as it is.
+    if let Some(library) = env::var_os("FISTAGE_FMI_LIBRARY") {
+        let library = PathBuf::from(library);
+        assert!(
+            library.is_file(),
+            "FISTAGE_FMI_LIBRARY names no file: {}",
+            library.display()
+        );
+        println!("cargo:rustc-env=FISTAGE_FMI_EMBEDDED={}", library.display());
+        println!("cargo:rerun-if-changed={}", library.display());
+        return;
+    }
     let manifest_dir = PathBuf::from(env::var("CARGO_MANIFEST_DIR").expect("set by cargo"));
     let root = manifest_dir.join("..");
     let target = PathBuf::from(env::var("OUT_DIR").expect("set by cargo")).join("fmi-target");

@@ -266,6 +266,10 @@ pub struct Tolerance {
     pub atol_scale: f64,
 }
 
+/// The most points a simulated curve or FRF takes (each point is a
+/// simulated run): checked before anything is allocated.
+pub const MAX_LAB_POINTS: usize = 1000;
+
 /// `n` values from `lo` to `hi`, equally spaced on a logarithmic scale (at least 2).
 pub fn log_spaced(lo: f64, hi: f64, n: usize) -> Vec<f64> {
     let n = n.max(2);

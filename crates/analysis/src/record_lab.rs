@@ -59,6 +59,7 @@ impl RecordLab {
                 fistage_model::rule::show(self.dt)
             )));
         }
+        check_samples(PROGRAM_DURATION, self.dt)?;
         let friction = stage.friction();
         let (time, force, segments) = lab_program(friction.f_c, friction.f_s, self.dt);
         let n = time.len();
@@ -115,6 +116,7 @@ impl RecordLab {
             ));
         };
         let t_end = duration.unwrap_or(loaded.scenario.duration);
+        check_samples(t_end, self.dt)?;
         let n = (t_end / self.dt + 1e-9).floor() as usize + 1;
         if !(self.dt > 0.0 && self.dt.is_finite()) || n < fistage_ident::record::data::MIN_SAMPLES {
             return Err(IdentError::InvalidOption(format!(
@@ -234,4 +236,27 @@ impl Excitation for HeldForce {
     fn breakpoints(&self) -> Vec<f64> {
         self.time[1..].to_vec()
     }
+}
+
+/// The most samples a simulated record holds (1000 s at 10 kHz; three
+/// columns of 8 bytes each): checked before anything is allocated.
+pub const MAX_RECORD_SAMPLES: f64 = 1e7;
+
+/// The length of the open-loop lab program, s.
+const PROGRAM_DURATION: f64 = 7.0;
+
+/// Refuses a record of `duration` s at interval `dt` s with more than
+/// [`MAX_RECORD_SAMPLES`] samples, naming both.
+fn check_samples(duration: f64, dt: f64) -> Result<()> {
+    let samples = duration / dt;
+    if samples.is_finite() && samples <= MAX_RECORD_SAMPLES {
+        return Ok(());
+    }
+    Err(IdentError::InvalidOption(format!(
+        "{} s at {} Hz is {} samples; a simulated record holds at most {MAX_RECORD_SAMPLES:e} \
+         (shorten the duration or lower the rate)",
+        fistage_model::rule::show(duration),
+        fistage_model::rule::show(1.0 / dt),
+        fistage_model::rule::show(samples),
+    )))
 }

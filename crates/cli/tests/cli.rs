@@ -1582,3 +1582,75 @@ fn refused_numbers_are_shown_readably() {
         );
     }
 }
+
+/// Sizes a flag controls are checked against their stated limits before
+/// anything is allocated: the errors name the flag or the quantities, at
+/// once (these used to abort on allocation or run for ever).
+#[test]
+fn sizes_from_flags_are_refused_before_allocating() {
+    let robot = repository().join("robots/stage_1dof_rigid.urdf");
+    let scenario = repository().join("scenarios/identify/closed_loop_sine.toml");
+    let out = scratch("sizes").join("data.csv");
+    let robot_text = robot.display().to_string();
+    let scenario_text = scenario.display().to_string();
+    let out_text = out.display().to_string();
+    for (args, needle) in [
+        (
+            vec![
+                "identify",
+                "simulate-stribeck",
+                &robot_text,
+                "--points",
+                "100000000000",
+                "--out",
+                &out_text,
+            ],
+            "--points must be from 2 to 1000",
+        ),
+        (
+            vec![
+                "identify",
+                "simulate-frf",
+                &robot_text,
+                "--points",
+                "1000000000",
+                "--out",
+                &out_text,
+            ],
+            "--points must be from 2 to 1000",
+        ),
+        (
+            vec![
+                "identify",
+                "simulate-record",
+                &robot_text,
+                "--rate",
+                "1e7",
+                "--out",
+                &out_text,
+            ],
+            "a simulated record holds at most 1e7",
+        ),
+        (
+            vec![
+                "identify",
+                "simulate-record",
+                &scenario_text,
+                "--closed-loop",
+                "--duration",
+                "1e6",
+                "--rate",
+                "1e7",
+                "--out",
+                &out_text,
+            ],
+            "a simulated record holds at most 1e7",
+        ),
+    ] {
+        let output = fistage().args(&args).output().expect("fistage runs");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(!output.status.success(), "{args:?}");
+        assert!(stderr.contains(needle), "{args:?}: {stderr}");
+        assert!(!out.exists(), "{args:?} wrote {}", out.display());
+    }
+}

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
-use fistage_analysis::lab::{FrfLab, LabStage, StribeckLab, log_spaced};
+use fistage_analysis::lab::{FrfLab, LabStage, MAX_LAB_POINTS, StribeckLab, log_spaced};
 use fistage_ident::report::{
     frf_curve_csv, frf_data_vs_fit_csv, stribeck_curve_csv, stribeck_data_vs_fit_csv,
 };
@@ -146,8 +146,8 @@ fn check_range(name: &str, lo: f64, hi: f64, points: usize) -> Result<()> {
             fistage_model::rule::show(hi)
         );
     }
-    if points < 2 {
-        bail!("--points must be at least 2, got {points}");
+    if !(2..=MAX_LAB_POINTS).contains(&points) {
+        bail!("--points must be from 2 to {MAX_LAB_POINTS}, got {points}");
     }
     Ok(())
 }

@@ -18,9 +18,12 @@ use std::io::Read;
 use flate2::read::ZlibDecoder;
 use thiserror::Error;
 
-/// The largest decompressed variable read, bytes: a guard against corrupt or
-/// hostile streams that claim or inflate to more.
-const MAX_VARIABLE_BYTES: u64 = 4 << 30;
+/// The largest decompressed variable read, bytes (64 M doubles: an hour and
+/// three quarters of a 10 kHz record in one column): a guard against
+/// corrupt or hostile streams that claim or inflate to more. A stream is
+/// inflated only up to it, so a small file that would inflate to gigabytes
+/// costs no more memory than this.
+pub const MAX_VARIABLE_BYTES: u64 = 512 << 20;
 
 /// What can go wrong while reading a MAT-file.
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -214,12 +217,22 @@ impl<'a> Cursor<'a> {
 fn inflate(data: &[u8], offset: usize) -> Result<Vec<u8>, MatReadError> {
     let mut out = Vec::new();
     ZlibDecoder::new(data)
-        .take(MAX_VARIABLE_BYTES)
+        .take(MAX_VARIABLE_BYTES + 1)
         .read_to_end(&mut out)
         .map_err(|e| MatReadError::Corrupt {
             offset,
             what: format!("compressed variable: {e}"),
         })?;
+    if out.len() as u64 > MAX_VARIABLE_BYTES {
+        return Err(MatReadError::Corrupt {
+            offset,
+            what: format!(
+                "the compressed variable inflates to more than {} MiB, the most a variable may \
+                 hold",
+                MAX_VARIABLE_BYTES >> 20
+            ),
+        });
+    }
     Ok(out)
 }
 
@@ -396,5 +409,32 @@ mod tests {
             read_variables(&truncated),
             Err(MatReadError::Truncated { .. })
         ));
+    }
+
+    /// A small compressed variable that inflates past the limit (zeros
+    /// compress a thousandfold) is refused after inflating no more than the
+    /// limit, with the byte it starts at.
+    #[test]
+    fn a_variable_that_inflates_past_the_limit_is_refused() {
+        use flate2::Compression;
+        use flate2::write::ZlibEncoder;
+        use std::io::Write;
+        let mut encoder = ZlibEncoder::new(Vec::new(), Compression::best());
+        let zeros = vec![0u8; 1 << 20];
+        for _ in 0..(MAX_VARIABLE_BYTES >> 20) + 1 {
+            encoder.write_all(&zeros).expect("compressed");
+        }
+        let stream = encoder.finish().expect("compressed");
+        assert!(stream.len() < 2 << 20, "{} bytes", stream.len());
+        let mut file = vec![b' '; 128];
+        file[124..128].copy_from_slice(&[0x00, 0x01, b'I', b'M']);
+        file.extend_from_slice(&15u32.to_le_bytes());
+        file.extend_from_slice(&(stream.len() as u32).to_le_bytes());
+        file.extend_from_slice(&stream);
+        let error = read_variables(&file).expect_err("refused");
+        assert!(
+            matches!(&error, MatReadError::Corrupt { offset: 128, what } if what.contains("512 MiB")),
+            "{error}"
+        );
     }
 }
