@@ -103,7 +103,7 @@ impl Assessment {
         if self.analysis.simulation()
             && let Some((stable, amplitude, yaw)) = simulated_verdict(loaded, self)
         {
-            outcome.stable_sim = Some(stable);
+            outcome.stable_sim = stable;
             outcome.amplitude = Some(amplitude);
             outcome.yaw_amplitude = yaw;
         }
@@ -168,9 +168,10 @@ pub const MAX_POINT_SAMPLES: f64 = fistage_model::scenario::MAX_SAMPLES;
 
 /// Whether a simulated duration per point fits in memory: a run is sampled
 /// at the scenario's rate (at least 4000 samples) and may be extended to
-/// four times its duration while it is still decaying.
+/// four times its duration while it is still decaying (longer looks are
+/// taken only where they fit).
 pub fn check_duration(scenario: &Scenario, duration: f64) -> Result<(), String> {
-    let samples = 4.0 * (duration * scenario.sample_rate).max(4000.0);
+    let samples = 4.0 * point_samples(scenario, duration);
     if samples > MAX_POINT_SAMPLES {
         return Err(format!(
             "{duration:e} s at {} Hz is up to {samples:.3e} samples per point (runs still decaying are extended to four times their duration); at most {MAX_POINT_SAMPLES:e}",
@@ -178,6 +179,12 @@ pub fn check_duration(scenario: &Scenario, duration: f64) -> Result<(), String> 
         ));
     }
     Ok(())
+}
+
+/// Output samples of one simulated run of `duration` s (at the scenario's
+/// rate, at least 4000; see `steady_peak_to_peak`).
+fn point_samples(scenario: &Scenario, duration: f64) -> f64 {
+    (duration * scenario.sample_rate).max(4000.0)
 }
 
 /// Applies one parameter (a path of the parameter table) to a scenario and
@@ -322,20 +329,97 @@ fn steady_peak_to_peak(loaded: &Loaded, engine: &dyn Engine, duration: f64) -> O
 /// Simulated verdict: (no persistent oscillation, tracking amplitude, yaw
 /// amplitude). A run that is still decaying (last-quarter peak-to-peak below
 /// 80% of the quarter before, but above the threshold) is run again twice as
-/// long, at most twice.
-fn simulated_verdict(loaded: &Loaded, assessment: &Assessment) -> Option<(bool, f64, Option<f64>)> {
+/// long, at most twice. One still decaying after the longest look has no
+/// verdict (`None`): its motion is neither below the threshold nor
+/// persistent, and calling it oscillating would count a decaying stage as
+/// an unstable one (a population's interval then spans both outcomes).
+fn simulated_verdict(
+    loaded: &Loaded,
+    assessment: &Assessment,
+) -> Option<(Option<bool>, f64, Option<f64>)> {
     let mut duration = assessment.duration.unwrap_or(loaded.scenario.duration);
     let x0 = initial_state(&loaded.model, &loaded.scenario).ok()?;
     let engine = verdict_engine(loaded, &x0);
-    for extension in 0..3 {
+    for extension in 0..=LONGER_LOOKS {
         let steady = steady_peak_to_peak(loaded, engine.as_ref(), duration)?;
-        if steady.last <= assessment.oscillation_threshold {
-            return Some((true, steady.last, steady.yaw));
+        // A look longer than memory allows is not taken: the run stays
+        // without a verdict. (`check_duration` guarantees the first three.)
+        let next_fits = point_samples(&loaded.scenario, 2.0 * duration) <= MAX_POINT_SAMPLES;
+        let last_look = extension == LONGER_LOOKS || !next_fits;
+        match judge(&steady, assessment.oscillation_threshold, last_look) {
+            Look::Verdict(verdict) => return Some((verdict, steady.last, steady.yaw)),
+            Look::Longer => duration *= 2.0,
         }
-        if steady.last >= 0.8 * steady.before || extension == 2 {
-            return Some((false, steady.last, steady.yaw));
-        }
-        duration *= 2.0;
     }
     None
+}
+
+/// Runs twice as long a still decaying run may get: up to 16 times its
+/// duration, where a stage decaying by 25x every 2 s (as some of a 1-DOF FI
+/// population do) has long reached the threshold.
+const LONGER_LOOKS: usize = 4;
+
+/// What one look at a run's steady motion decides.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Look {
+    /// The verdict (no persistent oscillation), or none the motion backs.
+    Verdict(Option<bool>),
+    /// Still decaying: look at a run twice as long.
+    Longer,
+}
+
+/// Below the threshold: no oscillation; keeping [`PERSISTENT_RATIO`] of
+/// the previous quarter: persistent; else decaying, which is a verdict of
+/// its own only once the longest look is taken: none.
+fn judge(steady: &Steady, threshold: f64, last_look: bool) -> Look {
+    if steady.last <= threshold {
+        Look::Verdict(Some(true))
+    } else if steady.last >= PERSISTENT_RATIO * steady.before {
+        Look::Verdict(Some(false))
+    } else if last_look {
+        Look::Verdict(None)
+    } else {
+        Look::Longer
+    }
+}
+
+/// The share of the previous quarter's peak-to-peak the last quarter's must
+/// keep for the motion to count as persistent; below it the run is decaying.
+const PERSISTENT_RATIO: f64 = 0.8;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn steady(last: f64, before: f64) -> Steady {
+        Steady {
+            last,
+            before,
+            yaw: None,
+        }
+    }
+
+    /// A run decaying by 25x every look (as some stages of a 1-DOF FI
+    /// population do, down to round-off when run for 16 s) is looked at
+    /// longer, and after the longest look has no verdict: it is neither
+    /// below the threshold nor persistent. A steady amplitude is a
+    /// persistent oscillation at any look; one under the threshold is none.
+    #[test]
+    fn a_decaying_run_is_not_called_oscillating() {
+        let threshold = 1e-9;
+        let decaying = steady(4e-8, 1e-6);
+        assert_eq!(judge(&decaying, threshold, false), Look::Longer);
+        assert_eq!(judge(&decaying, threshold, true), Look::Verdict(None));
+        let persistent = steady(3e-6, 3.1e-6);
+        assert_eq!(
+            judge(&persistent, threshold, false),
+            Look::Verdict(Some(false))
+        );
+        assert_eq!(
+            judge(&persistent, threshold, true),
+            Look::Verdict(Some(false))
+        );
+        let settled = steady(5e-10, 1e-6);
+        assert_eq!(judge(&settled, threshold, true), Look::Verdict(Some(true)));
+    }
 }

@@ -130,6 +130,12 @@ fn report(summary: &Summary, out_dir: &Path) {
     if let Some(p) = &summary.p_oscillating {
         show("P(oscillating)", p);
     }
+    if summary.undetermined_simulated > 0 {
+        println!(
+            "{} samples without a simulated verdict (still decaying after the longest run, or a failed run: see samples.csv)",
+            summary.undetermined_simulated
+        );
+    }
     if summary.undetermined_linear + summary.refused > 0 {
         println!(
             "{} samples without a linear verdict the numerics back, {} stages the model refused (see samples.csv)",

@@ -51,11 +51,27 @@ pub struct TuneArgs {
     pub force: bool,
 }
 
+/// A gain range: LOW,HIGH with 0 < LOW < HIGH, each end a value the gains'
+/// rule of the parameter table admits (so every gain searched, and the one
+/// recommended, is one `fistage check` accepts).
 fn range(name: &str, values: &[f64]) -> anyhow::Result<[f64; 2]> {
-    match values {
-        [lo, hi] if lo.is_finite() && hi.is_finite() && *lo > 0.0 && hi > lo => Ok([*lo, *hi]),
-        _ => bail!("--{name} must be LOW,HIGH with 0 < LOW < HIGH, got {values:?}"),
+    let shown: Vec<String> = values
+        .iter()
+        .map(|v| fistage_model::rule::show(*v))
+        .collect();
+    let [lo, hi] = match values {
+        [lo, hi] if lo.is_finite() && hi.is_finite() && *lo > 0.0 && hi > lo => [*lo, *hi],
+        _ => bail!(
+            "--{name} must be LOW,HIGH with 0 < LOW < HIGH, got {}",
+            shown.join(",")
+        ),
+    };
+    for end in [lo, hi] {
+        if let Err(violation) = fistage_model::scenario::Gain::RULE.check(end) {
+            bail!("--{name}: a gain {violation}");
+        }
     }
+    Ok([lo, hi])
 }
 
 fn settings(args: &TuneArgs) -> anyhow::Result<TuneSettings> {

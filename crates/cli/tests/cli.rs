@@ -1654,3 +1654,26 @@ fn sizes_from_flags_are_refused_before_allocating() {
         assert!(!out.exists(), "{args:?} wrote {}", out.display());
     }
 }
+
+/// `tune`'s gain ranges follow the parameter table's rule for gains: a range
+/// the loader would refuse as gains is refused as a flag, naming it, before
+/// any gain is recommended.
+#[test]
+fn tune_ranges_follow_the_gains_rule() {
+    let scenario = repository().join("scenarios/robust/four_bearing_population.toml");
+    for (flag, range) in [("--k-range", "1e30,1e40"), ("--c-range", "1,1e19")] {
+        let output = fistage()
+            .arg("tune")
+            .arg(&scenario)
+            .args([flag, range, "--out"])
+            .arg(scratch("tune-ranges"))
+            .output()
+            .expect("fistage runs");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(!output.status.success(), "{flag} {range}: {stderr}");
+        assert!(
+            stderr.contains(flag) && stderr.contains("at most 1e18"),
+            "{flag} {range}: {stderr}"
+        );
+    }
+}

@@ -517,9 +517,14 @@ pub struct Summary {
     pub p_unstable_linear: Option<Probability>,
     /// Samples whose linear verdict the numerics could not back.
     pub undetermined_linear: usize,
-    /// P(persistent oscillation in simulation) over the simulated samples.
+    /// P(persistent oscillation in simulation) over the simulated samples;
+    /// the interval also spans every outcome of those without a verdict.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub p_oscillating: Option<Probability>,
+    /// Samples without a simulated verdict: still decaying after the
+    /// longest run (neither below the threshold nor persistent), or a
+    /// failed run.
+    pub undetermined_simulated: usize,
     /// Samples whose stage could not be built (see samples.csv, `refused`).
     pub refused: usize,
     /// Quantiles of the largest real part, 1/s.
@@ -605,6 +610,11 @@ impl Summary {
                     built - simulated.len(),
                 )
             }),
+            undetermined_simulated: if analysis.simulation() {
+                built - simulated.len()
+            } else {
+                0
+            },
             refused: results.len() - built,
             max_real_eig_quantiles: Quantiles::of(eig.iter().map(|&(_, v)| v).collect()),
             amplitude_quantiles: Quantiles::of(amp.iter().map(|&(_, v)| v).collect()),
