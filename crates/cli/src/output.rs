@@ -122,7 +122,7 @@ fn refuse_file(target: &Path) -> anyhow::Result<()> {
 
 /// `.<name>.<tag>` in the target's parent folder (made if missing), on the
 /// same file system as the target, so that moving it into place is a rename.
-fn staging_beside(target: &Path, tag: &str) -> anyhow::Result<PathBuf> {
+pub(crate) fn staging_beside(target: &Path, tag: &str) -> anyhow::Result<PathBuf> {
     let parent = match target.parent() {
         Some(parent) if !parent.as_os_str().is_empty() => parent.to_path_buf(),
         _ => PathBuf::from("."),

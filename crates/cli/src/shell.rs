@@ -37,10 +37,8 @@ pub fn man(args: &ManArgs, command: clap::Command) -> anyhow::Result<()> {
     // The pages are made in a folder beside `out` and each moved over its
     // earlier version only when all are written: a failure leaves the
     // earlier pages as they were.
-    let staging = out
-        .canonicalize()
-        .and_then(|folder| fistage_model::output::partial_beside(&folder))
-        .with_context(|| format!("cannot write into {}", out.display()))?;
+    let staging = crate::output::staging_beside(&out, &format!("partial-{}", std::process::id()))?;
+    let _ = std::fs::remove_dir_all(&staging);
     let made = std::fs::create_dir(&staging)
         .and_then(|()| clap_mangen::generate_to(command, &staging))
         .and_then(|()| move_pages(&staging, &out));

@@ -23,7 +23,7 @@ pub fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), Error> {
 
 /// A hidden name beside `path` that no other writer (process or thread)
 /// uses at the same time.
-pub fn partial_beside(path: &Path) -> Result<PathBuf, Error> {
+fn partial_beside(path: &Path) -> Result<PathBuf, Error> {
     static SERIAL: AtomicU64 = AtomicU64::new(0);
     let name = path
         .file_name()
