@@ -41,7 +41,8 @@ NS = "urn:fistage:urdf:1"
 FI = "{%s}" % NS
 ET.register_namespace("fistage", NS)
 
-CATEGORIES = ["robot", "scenario", "sweep", "robust", "identify", "modes", "flags", "output"]
+CATEGORIES = ["robot", "scenario", "sweep", "robust", "identify", "modes", "flags", "output", "journal",
+              "race"]
 OUTCOMES = ["clear error", "right answer", "crash", "hang", "wrong answer", "unclear error"]
 BAD = ("crash", "hang", "wrong answer")
 
@@ -70,11 +71,14 @@ class Case:
     json_stdout: stdout is JSON and checked like an output file.
     guard: paths that existed before the run and must be unchanged after a
     failed run (and, with guard_always, after any run).
-    post: extra oracle, called as post(case, result) -> problem string or None.
+    post: extra oracle, called as post(case, result) -> problem string or None
+    (after a run of any exit status when post_always, else after exit 0).
+    during: called as during(process) while the program runs (a second
+    program, a file put into its folder); what it finds is for post.
     """
 
     def __init__(self, cat, name, args, expect, needles, outputs=(), json_stdout=False,
-                 guard=(), guard_always=False, post=None, cwd=None):
+                 guard=(), guard_always=False, post=None, cwd=None, during=None, post_always=False):
         self.cat = cat
         self.name = name
         self.args = [str(a) for a in args]
@@ -85,6 +89,8 @@ class Case:
         self.guard = list(guard)
         self.guard_always = guard_always
         self.post = post
+        self.post_always = post_always
+        self.during = during
         self.cwd = cwd or SCRATCH
 
     def repro(self):
@@ -135,12 +141,14 @@ def tq(s):
 # ---------------------------------------------------------------------------
 
 
-def run_program(args, cwd, timeout=None):
+def run_program(args, cwd, timeout=None, during=None):
     env = dict(os.environ)
     env["RUST_BACKTRACE"] = "0"  # short stderr; a panic still says "panicked"
     t0 = time.time()
     p = subprocess.Popen([BIN] + args, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                          stdin=subprocess.DEVNULL, env=env, start_new_session=True)
+    if during is not None:
+        during(p)
     timed_out = False
     try:
         out, err = p.communicate(timeout=timeout or TIMEOUT)
@@ -341,6 +349,10 @@ def classify(case, res, before):
     if res.rc != 0:
         if changed:
             return "wrong answer", "failed run changed pre-existing %s" % changed[0]
+        if case.post and case.post_always:
+            prob = case.post(case, res)
+            if prob:
+                return "wrong answer", prob
         low = res.stderr.lower()
         hit = [n for n in case.needles if n.lower() in low]
         first = first_line(res.stderr)
@@ -1969,13 +1981,123 @@ def gen_output(quick):
     f = write(fresh("output/keep", ".fmu"), "keep\n")
     add(cat, "fmu -o over an existing file", ["fmu", S, "-o", f], "either", ["exists", "--force", os.path.basename(f)])
 
+def journal_damages(lines):
+    """(label, journal text) pairs: the whole run's table cut and damaged as a
+    killed run, a full disk or a hand edit leaves it."""
+    head, rows = lines[0], lines[1:]
+    cut_cell = rows[2].rsplit(",", 1)[0] + "," + rows[2].rsplit(",", 1)[1][:2]
+    damaged_verdict = rows[1].replace(",true,", ",tru,", 1).replace(",false,", ",fals,", 1)
+    nan_cell = rows[1].rsplit(",", 1)[0] + ",NaN"
+    return [
+        ("last row cut in its last cell", "\n".join([head, rows[0], rows[1], cut_cell])),
+        ("last row cut after its last cell", "\n".join([head, rows[0], rows[1]])),
+        ("a verdict damaged inside a whole line", "\n".join([head, rows[0], damaged_verdict, rows[2]]) + "\n"),
+        ("a NaN written into a row", "\n".join([head, rows[0], nan_cell]) + "\n"),
+        ("the header cut", head[: len(head) // 2]),
+        ("an empty journal", ""),
+        ("binary junk after whole rows", "\n".join([head, rows[0]]) + "\n\x00\xff\x01garbage"),
+        ("a row twice", "\n".join([head, rows[0], rows[0], rows[1]]) + "\n"),
+        ("a row of another grid", "\n".join([head, "1.5e4" + rows[0][rows[0].index(","):]]) + "\n"),
+        ("windows line ends", "\r\n".join([head, rows[0], rows[1]]) + "\r\n"),
+    ]
+
+
+def gen_journal(quick):
+    """A killed study resumed from a damaged journal gives the whole run's
+    table byte for byte (damaged rows computed again), or a clear error."""
+    cat = "journal"
+    studies = [("sweep", scenario_file(cat, sweep_text(), "jsw"), "points", [])]
+    studies.append(("robust", scenario_file(cat, robust_text(), "jrb"), "samples", ["--samples", "8"]))
+    for command, scen, table, extra in studies:
+        whole = fresh("out/whole")
+        setup([command, scen, "--out", whole, "--threads", "1"] + extra)
+        try:
+            lines = read(os.path.join(whole, table + ".csv")).splitlines()
+        except OSError:
+            continue
+        if len(lines) < 4:
+            continue
+        damages = journal_damages(lines)
+        for label, text in damages[:4] if quick else damages:
+            out = fresh("out/killed")
+            journal = os.path.join(os.path.dirname(out), "." + os.path.basename(out) + ".journal")
+            write(os.path.join(journal, table + ".partial.csv"), text)
+            shutil.copy(os.path.join(whole, "provenance.json"), os.path.join(journal, "provenance.json"))
+            add(cat, "%s resumed from a journal: %s" % (command, label),
+                [command, scen, "--out", out, "--threads", "1"] + extra, "accept", [],
+                outputs=[out], post=same_file(table + ".csv", os.path.join(whole, table + ".csv")))
+
+
+def wait_for(path, process, seconds=60):
+    """Until `path` exists or the process ended; whether it exists."""
+    t0 = time.time()
+    while not os.path.exists(path) and process.poll() is None and time.time() - t0 < seconds:  # noqa
+        time.sleep(0.005)
+    return os.path.exists(path)
+
+
+def gen_race(quick):
+    """Commands racing for one output folder: a second writer is refused, a
+    file put into the folder during a run survives and the result is kept
+    beside it; never two exits 0 for one folder, never a lost file."""
+    cat = "race"
+    long_sweep = scenario_file(cat, sweep_text('analysis = "simulation"\nduration = 6.0\n',
+                                               axis("controller.k", "1e4", "1e6", 160, '"log"')), "rsw")
+    for command, extra in [("sweep", []), ("robust", ["--samples", "400"])]:
+        scen = long_sweep if command == "sweep" else scenario_file(
+            cat, robust_text(head=ROBUST_HEAD.replace('"linear"', '"simulation"'),
+                             base=fig05b(duration="4.0")), "rrb")
+        out = fresh("out/race")
+        journal = os.path.join(os.path.dirname(out), "." + os.path.basename(out) + ".journal")
+        seen = {}
+
+        def second_writer(p, out=out, journal=journal, seen=seen, scen=scen, command=command, extra=extra):
+            seen["locked"] = wait_for(journal, p)
+            seen["second"] = run_program([command, scen, "--out", out, "--threads", "1"] + extra, SCRATCH)
+
+        def both_checked(case, res, seen=seen):
+            second = seen.get("second")
+            if not seen.get("locked") or second is None or second.seconds > res.seconds:
+                return "the first run ended before the race (lengthen it)"
+            if second.rc == 0 and res.rc == 0:
+                return "two runs into one folder both exited 0"
+            if second.rc != 0 and "another command" not in second.stderr:
+                return "second writer refused unclearly: %s" % first_line(second.stderr)
+            return None
+
+        add(cat, "%s: a second run into the folder being written" % command,
+            [command, scen, "--out", out, "--threads", "1"] + extra, "accept", [], outputs=[out],
+            during=second_writer, post=both_checked, post_always=True)
+
+        out = fresh("out/race")
+        journal = os.path.join(os.path.dirname(out), "." + os.path.basename(out) + ".journal")
+        notes = os.path.join(out, "notes.txt")
+        mark = {}
+
+        def user_file(p, out=out, journal=journal, notes=notes, mark=mark):
+            mark["started"] = wait_for(journal, p)
+            write(notes, "mine\n")
+            mark["in time"] = p.poll() is None
+
+        def notes_kept(case, res, notes=notes, mark=mark):
+            if not mark.get("in time"):
+                return "the run ended before the file was put in (lengthen it)"
+            if not os.path.exists(notes):
+                return "a file put into the folder during the run was deleted"
+            return None
+
+        add(cat, "%s: a user's file put into the folder during the run" % command,
+            [command, scen, "--out", out, "--threads", "1"] + extra, "refuse", ["changed while"],
+            during=user_file, post=notes_kept, post_always=True)
+
+
 # ---------------------------------------------------------------------------
 # Main
 # ---------------------------------------------------------------------------
 
 GENERATORS = {"robot": gen_robot, "scenario": gen_scenario, "sweep": gen_sweep,
               "robust": gen_robust, "identify": gen_identify, "modes": gen_modes, "flags": gen_flags,
-              "output": gen_output}
+              "output": gen_output, "journal": gen_journal, "race": gen_race}
 
 
 def main():
@@ -2008,7 +2130,7 @@ def main():
     def work(i):
         c = CASES[i]
         before = {p: snapshot(p) for p in c.guard}
-        res = run_program(c.args, c.cwd)
+        res = run_program(c.args, c.cwd, during=c.during)
         return classify(c, res, before) + (res,)
 
     done = [0]

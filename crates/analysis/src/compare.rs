@@ -18,8 +18,6 @@
 //! reduction against the baseline, `100 (1 - m / m_baseline)` percent, with
 //! its mean and standard deviation over the second axis.
 
-use std::path::Path;
-
 use fistage_model::{LoadError, Loaded, Parameter, RobotSpec};
 
 use crate::assess::{in_parallel, study_with};
@@ -316,47 +314,33 @@ impl Comparison {
         cells.join(",")
     }
 
-    /// The rows of `path` that belong to this comparison (others, and
-    /// damaged lines, are skipped). A failed run's row is not kept: it is
-    /// computed again.
-    pub fn read_rows(&self, path: &Path) -> Vec<CompareRow> {
-        let Ok(text) = std::fs::read_to_string(path) else {
-            return Vec::new();
-        };
+    /// The finished row a line of the table holds, if it is one of this
+    /// comparison's. A failed run's row is not one: it is computed again.
+    pub fn parse_row(&self, line: &str) -> Option<CompareRow> {
         let n_axes = self.axes.len();
-        let mut rows = Vec::new();
-        for line in text.lines().skip(1) {
-            let cells: Vec<&str> = line.split(',').collect();
-            if cells.len() != 1 + n_axes + 6 {
-                continue;
-            }
-            let Some(case) = self.cases.iter().position(|c| c.name == cells[0]) else {
-                continue;
-            };
-            let Some(index) = self.index_of(case, &cells[1..=n_axes]) else {
-                continue;
-            };
-            let number = |s: &str| s.parse::<f64>().ok();
-            let metric = &cells[1 + n_axes..];
-            let Some(rms_error) = number(metric[0]) else {
-                continue;
-            };
-            rows.push(CompareRow {
-                index,
-                case,
-                values: self.item(index).1,
-                metrics: Some(Metrics {
-                    rms_error,
-                    peak_error: number(metric[1]),
-                    peak_error_std: number(metric[2]),
-                    settling_time: number(metric[3]),
-                    settling_time_std: number(metric[4]),
-                    unsettled: metric[5].parse().ok(),
-                }),
-                failure: None,
-            });
+        let cells: Vec<&str> = line.split(',').collect();
+        if cells.len() != 1 + n_axes + 6 {
+            return None;
         }
-        rows
+        let case = self.cases.iter().position(|c| c.name == cells[0])?;
+        let index = self.index_of(case, &cells[1..=n_axes])?;
+        let number = |s: &str| s.parse::<f64>().ok();
+        let metric = &cells[1 + n_axes..];
+        let rms_error = number(metric[0])?;
+        Some(CompareRow {
+            index,
+            case,
+            values: self.item(index).1,
+            metrics: Some(Metrics {
+                rms_error,
+                peak_error: number(metric[1]),
+                peak_error_std: number(metric[2]),
+                settling_time: number(metric[3]),
+                settling_time_std: number(metric[4]),
+                unsettled: metric[5].parse().ok(),
+            }),
+            failure: None,
+        })
     }
 
     /// The item of `case` whose axis cells read `cells`.

@@ -32,8 +32,7 @@
 //! sit above the mean). `spread.friction` spreads f_c, f_s and sigma0 together
 //! (keeping f_s >= f_c).
 
-use std::path::Path;
-
+use fistage_model::rule::readable_numbers;
 use fistage_model::{LoadError, Loaded, Parameter, RobotSpec, Scenario};
 use serde::Deserialize;
 
@@ -141,7 +140,7 @@ impl SweepSpec {
             .ok_or_else(|| scenario.error("sweep", "the scenario has no [sweep] table"))?;
         let raw = with_listed_axes(raw).map_err(|(key, m)| scenario.error(key, m))?;
         let spec: SweepSpec = raw.try_into().map_err(|e: toml::de::Error| {
-            scenario.error("sweep", e.to_string().trim().to_string())
+            scenario.error("sweep", readable_numbers(e.to_string().trim()))
         })?;
         if spec.axes.is_empty() || spec.axes.len() > 2 {
             return Err(scenario.error(
@@ -404,50 +403,32 @@ pub fn row(result: &PointResult) -> String {
     cells.join(",")
 }
 
-/// Reads rows written by [`row`] back, matching each to its grid index.
-/// Rows of other grids (or damaged rows, such as a half-written last line) are skipped.
-pub fn read_rows(path: &Path, spec: &SweepSpec) -> Vec<PointResult> {
-    let Ok(text) = std::fs::read_to_string(path) else {
-        return Vec::new();
-    };
+/// The grid point a line written by [`row`] holds, if it is a point of
+/// this grid (a caller that must not take damaged lines also checks that
+/// [`row`] writes the result back as the same line).
+pub fn parse_row(line: &str, spec: &SweepSpec) -> Option<PointResult> {
     let n_axes = spec.axes.len();
-    let axis_values: Vec<Vec<String>> = spec
-        .axes
-        .iter()
-        .map(|a| a.values().iter().map(|v| format!("{v:e}")).collect())
-        .collect();
-    let mut results = Vec::new();
-    for line in text.lines().skip(1) {
-        let cells: Vec<&str> = line.split(',').collect();
-        if cells.len() != n_axes + 5 {
-            continue;
-        }
-        let mut index = 0;
-        let mut stride = 1;
-        let mut matched = true;
-        for (k, values) in axis_values.iter().enumerate() {
-            match values.iter().position(|v| v == cells[k]) {
-                Some(i) => {
-                    index += i * stride;
-                    stride *= values.len();
-                }
-                None => matched = false,
-            }
-        }
-        if !matched {
-            continue;
-        }
-        let flag = |s: &str| s.parse::<bool>().ok();
-        let number = |s: &str| s.parse::<f64>().ok();
-        results.push(PointResult {
-            index,
-            parameters: spec.point(index),
-            stable_linear: flag(cells[n_axes]),
-            stable_sim: flag(cells[n_axes + 1]),
-            amplitude: number(cells[n_axes + 2]),
-            max_real_eig: number(cells[n_axes + 3]),
-            bistable: flag(cells[n_axes + 4]),
-        });
+    let cells: Vec<&str> = line.split(',').collect();
+    if cells.len() != n_axes + 5 {
+        return None;
     }
-    results
+    let mut index = 0;
+    let mut stride = 1;
+    for (axis, cell) in spec.axes.iter().zip(&cells) {
+        let values = axis.values();
+        let i = values.iter().position(|v| format!("{v:e}") == *cell)?;
+        index += i * stride;
+        stride *= values.len();
+    }
+    let flag = |s: &str| s.parse::<bool>().ok();
+    let number = |s: &str| s.parse::<f64>().ok();
+    Some(PointResult {
+        index,
+        parameters: spec.point(index),
+        stable_linear: flag(cells[n_axes]),
+        stable_sim: flag(cells[n_axes + 1]),
+        amplitude: number(cells[n_axes + 2]),
+        max_real_eig: number(cells[n_axes + 3]),
+        bistable: flag(cells[n_axes + 4]),
+    })
 }

@@ -57,8 +57,8 @@ impl Study for Comparison {
     fn index(row: &CompareRow) -> usize {
         row.index
     }
-    fn read_rows(&self, path: &Path) -> Vec<CompareRow> {
-        Comparison::read_rows(self, path)
+    fn parse_row(&self, line: &str) -> Option<CompareRow> {
+        Comparison::parse_row(self, line)
     }
     fn compute(
         &self,

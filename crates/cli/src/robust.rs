@@ -60,8 +60,8 @@ impl Study for Population<'_> {
     fn index(row: &SampleResult) -> usize {
         row.index
     }
-    fn read_rows(&self, path: &Path) -> Vec<SampleResult> {
-        table::read_rows(path, self.spec)
+    fn parse_row(&self, line: &str) -> Option<SampleResult> {
+        table::parse_row(line, self.spec)
     }
     fn compute(
         &self,

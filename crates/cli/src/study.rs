@@ -18,6 +18,8 @@ use std::sync::Mutex;
 use anyhow::{Context, bail};
 use fistage_analysis::assess::{MAX_THREADS, worker_threads};
 
+use fistage_model::output::write_whole;
+
 use crate::output::{OutputFolder, holds_files};
 use crate::progress;
 use crate::provenance::Provenance;
@@ -38,8 +40,10 @@ pub trait Study: Sync {
     fn row(&self, row: &Self::Row) -> String;
     /// The item a row is of.
     fn index(row: &Self::Row) -> usize;
-    /// The rows of `path` that belong to this study.
-    fn read_rows(&self, path: &Path) -> Vec<Self::Row>;
+    /// The row a line of the table holds, if it is a finished row of this
+    /// study ([`read_table`] takes it only when [`Study::row`] writes it
+    /// back as the same line).
+    fn parse_row(&self, line: &str) -> Option<Self::Row>;
     /// Computes these items on `threads` threads, calling `done` with each.
     fn compute(
         &self,
@@ -168,8 +172,15 @@ fn merge<S: Study>(
         }
         shards.push(theirs.shard.clone());
         let table = dir.join(S::TABLE);
-        refuse_non_finite_rows(&table)?;
-        let rows = study.read_rows(&table);
+        let Table { rows, refused } = read_table(study, &table)?;
+        if let Some(first) = refused.first() {
+            bail!(
+                "{}: line {}: {}; not merged",
+                table.display(),
+                first.line,
+                first.why
+            );
+        }
         anyhow::ensure!(
             !rows.is_empty(),
             "{}: no {} of this study",
@@ -183,23 +194,78 @@ fn merge<S: Study>(
     Ok(all)
 }
 
-/// A row with a NaN or infinite cell is damaged work: refuse it, naming it.
-fn refuse_non_finite_rows(table: &Path) -> anyhow::Result<()> {
-    let text = std::fs::read_to_string(table)
-        .with_context(|| format!("cannot read {}", table.display()))?;
-    for (line, row) in text.lines().enumerate().skip(1) {
-        if row
-            .split(',')
-            .any(|cell| cell.parse::<f64>().is_ok_and(|v| !v.is_finite()))
-        {
-            bail!(
-                "{}: line {}: a non-finite number ({row}); not merged",
-                table.display(),
-                line + 1
-            );
+/// The rows of a study's table or journal, as [`read_table`] found them.
+struct Table<R> {
+    /// The finished rows of this study, in file order.
+    rows: Vec<R>,
+    /// The lines not taken, each with why.
+    refused: Vec<RefusedLine>,
+}
+
+/// A line of a table that is not a finished row of its study.
+struct RefusedLine {
+    /// Line number in the file (the header is line 1).
+    line: usize,
+    why: &'static str,
+}
+
+/// The one reader of every study's tables and journals. A line is taken
+/// only when it is whole (ends with a line end: a killed run can leave a
+/// cut last line), holds no non-finite number, and is exactly the line
+/// [`Study::row`] writes for the row [`Study::parse_row`] reads from it (so
+/// a cell cut to "fa" is not read as a missing verdict). A missing file
+/// holds no rows; a file whose header is another study's is refused.
+fn read_table<S: Study>(study: &S, path: &Path) -> anyhow::Result<Table<S::Row>> {
+    let mut table = Table {
+        rows: Vec::new(),
+        refused: Vec::new(),
+    };
+    let text = match std::fs::read(path) {
+        Ok(bytes) => String::from_utf8_lossy(&bytes).into_owned(),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(table),
+        Err(e) => return Err(e).with_context(|| format!("cannot read {}", path.display())),
+    };
+    let mut lines = text.split_inclusive('\n');
+    match lines.next() {
+        None => return Ok(table),
+        Some(header) if header.trim_end_matches(['\n', '\r']) == study.header() => {}
+        Some(_) => {
+            table.refused.push(RefusedLine {
+                line: 1,
+                why: "not this study's header",
+            });
+            return Ok(table);
         }
     }
-    Ok(())
+    for (number, line) in lines.enumerate().map(|(k, line)| (k + 2, line)) {
+        let Some(line) = line.strip_suffix('\n') else {
+            table.refused.push(RefusedLine {
+                line: number,
+                why: "cut short (no line end)",
+            });
+            continue;
+        };
+        let line = line.strip_suffix('\r').unwrap_or(line);
+        match take_row(study, line) {
+            Ok(row) => table.rows.push(row),
+            Err(why) => table.refused.push(RefusedLine { line: number, why }),
+        }
+    }
+    Ok(table)
+}
+
+/// One line as a finished row of the study, or why not.
+fn take_row<S: Study>(study: &S, line: &str) -> Result<S::Row, &'static str> {
+    if line
+        .split(',')
+        .any(|cell| cell.parse::<f64>().is_ok_and(|v| !v.is_finite()))
+    {
+        return Err("a non-finite number");
+    }
+    match study.parse_row(line) {
+        Some(row) if study.row(&row) == line => Ok(row),
+        _ => Err("damaged, or not a finished row of this study"),
+    }
 }
 
 /// The items of the study (or shard): those already in the output folder
@@ -216,6 +282,11 @@ fn compute<S: Study>(
     let journal = folder.path();
     let partial_path = journal.join(journal_name::<S>());
     let mut finished: Vec<S::Row> = Vec::new();
+    let mut not_taken = 0;
+    let mut take = |table: Table<S::Row>| {
+        not_taken += table.refused.len();
+        finished.extend(table.rows);
+    };
     if holds_files(out_dir) {
         let earlier = provenance.check_folder(
             out_dir,
@@ -225,8 +296,8 @@ fn compute<S: Study>(
             (_, true, _) => {}
             (Ok(_), false, false) => {
                 // Items of any shard of the same study are items of this one.
-                finished.extend(study.read_rows(&out_dir.join(S::TABLE)));
-                finished.extend(study.read_rows(&out_dir.join(journal_name::<S>())));
+                take(read_table(study, &out_dir.join(S::TABLE))?);
+                take(read_table(study, &out_dir.join(journal_name::<S>()))?);
             }
             // The same study recomputed: its result is replaced whole.
             (Ok(_), false, true) => {}
@@ -240,7 +311,7 @@ fn compute<S: Study>(
             journal,
             "resume only the same study (--no-resume starts over, or choose another --out)",
         )?;
-        finished.extend(study.read_rows(&partial_path));
+        take(read_table(study, &partial_path)?);
     }
     provenance.write(journal)?;
     let mine = |index: usize| shard.is_none_or(|(i, n)| index % n == i);
@@ -250,6 +321,11 @@ fn compute<S: Study>(
     let todo: Vec<usize> = (0..study.len())
         .filter(|&k| mine(k) && finished.binary_search_by_key(&k, |r| S::index(r)).is_err())
         .collect();
+    if not_taken > 0 {
+        eprintln!(
+            "resuming: {not_taken} damaged or unfinished rows of the earlier work are computed again"
+        );
+    }
     if !finished.is_empty() {
         eprintln!(
             "resuming: {} {} already done, {} to go",
@@ -258,15 +334,19 @@ fn compute<S: Study>(
             todo.len()
         );
     }
-    let fresh = !partial_path.exists();
-    let mut partial = OpenOptions::new()
-        .create(true)
+    // The journal starts again from what was taken, written whole, so that
+    // no cut line of a killed run is continued by the next row.
+    let mut text = study.header() + "\n";
+    for row in &finished {
+        text.push_str(&study.row(row));
+        text.push('\n');
+    }
+    write_whole(&partial_path, text.as_bytes())
+        .with_context(|| format!("cannot write {}", partial_path.display()))?;
+    let partial = OpenOptions::new()
         .append(true)
         .open(&partial_path)
         .with_context(|| format!("cannot write {}", partial_path.display()))?;
-    if fresh {
-        writeln!(partial, "{}", study.header())?;
-    }
     let partial = Mutex::new(partial);
     let bar = progress::bar(&format!("{} {}", todo.len(), S::ITEMS));
     let total = todo.len().max(1);

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use fistage_analysis::sweep::{
-    Analyses, PointResult, Spacing, SweepSpec, header, read_rows, row as row_text, run_points,
+    Analyses, PointResult, Spacing, SweepSpec, header, parse_row, row as row_text, run_points,
 };
 use fistage_model::RobotSpec;
 use fistage_plot::{ColourScale, Heatmap, Series, XyPlot, write_heatmap, write_xy};
@@ -52,8 +52,8 @@ impl Study for Grid<'_> {
     fn index(row: &PointResult) -> usize {
         row.index
     }
-    fn read_rows(&self, path: &Path) -> Vec<PointResult> {
-        read_rows(path, self.spec)
+    fn parse_row(&self, line: &str) -> Option<PointResult> {
+        parse_row(line, self.spec)
     }
     fn compute(
         &self,

@@ -704,6 +704,147 @@ fn fmu_refuses_a_scenario_it_cannot_honour() {
     assert!(!dir.join("stop.fmu").exists());
 }
 
+/// A one-axis sweep of the Fig. 5b stage with FI over `points` gains, each
+/// simulated (and linearised, with `both`) for `duration` seconds.
+fn gain_sweep(analysis: &str, points: usize, duration: f64) -> String {
+    fig05b_for_a_second(&format!(
+        "[sweep]\nanalysis = \"{analysis}\"\n[[sweep.axis]]\nparameter = \"controller.k\"\nfrom = 1e4\nto = 1e6\npoints = {points}\nspacing = \"log\"\n"
+    ))
+    .replace("duration = 1.0", &format!("duration = {duration}"))
+}
+
+/// A journal left by a killed run may end in a cut line, and a line may be
+/// damaged in the middle: neither is taken as a result (a cell cut to "fa"
+/// is not a missing verdict), both are computed again, and the resumed
+/// table equals the whole run's byte for byte. A second kill after the
+/// resume leaves a journal that still reads (the cut line is not continued
+/// by the next row).
+#[test]
+fn a_damaged_journal_is_computed_again_not_taken() {
+    let dir = scratch("damaged-journal");
+    std::fs::create_dir_all(&dir).expect("dir");
+    let scenario = dir.join("gains.toml");
+    std::fs::write(&scenario, gain_sweep("both", 6, 0.3)).expect("write");
+    let out = |name: &str| dir.join(name).to_str().expect("path").to_string();
+    let sweep = |name: &str| {
+        fistage()
+            .arg("sweep")
+            .arg(&scenario)
+            .args(["--out", &out(name), "--threads", "1"])
+            .output()
+            .expect("runs")
+    };
+    assert!(sweep("whole").status.success());
+    let whole = std::fs::read_to_string(dir.join("whole/points.csv")).expect("points");
+    let lines: Vec<&str> = whole.lines().collect();
+    assert_eq!(lines.len(), 1 + 6);
+    let last_cell_cut = |line: &str| {
+        let (head, last) = line.rsplit_once(',').expect("cells");
+        assert!(last.len() >= 3, "a verdict to cut: {line}");
+        format!("{head},{}", &last[..2])
+    };
+    let damage_a_verdict = |line: &str| {
+        let damaged = line
+            .replacen(",true,", ",tru,", 1)
+            .replacen(",false,", ",fals,", 1);
+        assert_ne!(damaged, line, "a verdict to damage: {line}");
+        damaged
+    };
+    // Whole rows 1 and 3, row 2 damaged inside, row 4 cut mid-write.
+    let journal = format!(
+        "{}\n{}\n{}\n{}\n{}",
+        lines[0],
+        lines[1],
+        damage_a_verdict(lines[2]),
+        lines[3],
+        last_cell_cut(lines[4])
+    );
+    let killed = dir.join(".killed.journal");
+    std::fs::create_dir_all(&killed).expect("journal");
+    std::fs::write(killed.join("points.partial.csv"), journal).expect("journal");
+    std::fs::copy(
+        dir.join("whole/provenance.json"),
+        killed.join("provenance.json"),
+    )
+    .expect("provenance");
+    let resumed = sweep("killed");
+    let stderr = String::from_utf8_lossy(&resumed.stderr);
+    assert!(resumed.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("2 damaged or unfinished rows")
+            && stderr.contains("2 points already done, 4 to go"),
+        "{stderr}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("killed/points.csv")).expect("points"),
+        whole
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Two commands never write one folder at once: a second run into a folder
+/// being written is refused, and a file put into that folder during the
+/// first run is neither deleted nor mixed with the result: the folder stays
+/// as the user left it and the result is kept beside it.
+#[test]
+fn a_folder_being_written_is_neither_shared_nor_clobbered() {
+    let dir = scratch("race");
+    std::fs::create_dir_all(&dir).expect("dir");
+    let scenario = dir.join("gains.toml");
+    std::fs::write(&scenario, gain_sweep("simulation", 160, 6.0)).expect("write");
+    let target = dir.join("out");
+    let lock = dir.join(".out.lock");
+    let sweep = || {
+        let mut command = fistage();
+        command
+            .arg("sweep")
+            .arg(&scenario)
+            .arg("--out")
+            .arg(&target)
+            .args(["--threads", "1"]);
+        command
+    };
+    let first = sweep()
+        .stderr(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .expect("starts");
+    let started = std::time::Instant::now();
+    while !lock.exists() {
+        assert!(
+            started.elapsed().as_secs() < 60,
+            "the first run never took its lock"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let second = sweep().output().expect("runs");
+    let stderr = String::from_utf8_lossy(&second.stderr);
+    assert!(!second.status.success(), "a second writer was let in");
+    assert!(stderr.contains("another command is writing"), "{stderr}");
+    std::fs::create_dir_all(&target).expect("folder");
+    std::fs::write(target.join("notes.txt"), "mine").expect("notes");
+    assert!(
+        lock.exists(),
+        "the first run ended before the folder was changed: lengthen its sweep"
+    );
+    let first_ended = first.wait_with_output().expect("first run");
+    let stderr = String::from_utf8_lossy(&first_ended.stderr);
+    assert!(!first_ended.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("changed while this command ran") && stderr.contains("notes.txt was added"),
+        "{stderr}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(target.join("notes.txt")).expect("notes"),
+        "mine"
+    );
+    assert!(!target.join("points.csv").exists(), "results mixed in");
+    let kept = std::fs::read_to_string(dir.join("out.new/points.csv")).expect("kept result");
+    assert_eq!(kept.lines().count(), 1 + 160);
+    assert!(!lock.exists(), "the lock outlived its run");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// Pieces of different work never merge: a shard of another grid, the same
 /// shard twice, a row holding NaN, and resuming into another sweep's folder
 /// are refused, naming what differs.

@@ -61,6 +61,28 @@ pub fn show(value: f64) -> String {
     }
 }
 
+/// A message with every number written out in more than 20 characters (a
+/// parser's full-decimal `1e300`) shown as [`show`] shows it.
+pub fn readable_numbers(message: &str) -> String {
+    let mut out = String::with_capacity(message.len());
+    let mut rest = message;
+    while let Some(start) = rest.find(|c: char| c.is_ascii_digit()) {
+        let (before, from) = rest.split_at(start);
+        out.push_str(before);
+        let end = from
+            .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+            .unwrap_or(from.len());
+        let (number, after) = from.split_at(end);
+        match number.parse::<f64>() {
+            Ok(value) if number.len() > 20 => out.push_str(&show(value)),
+            _ => out.push_str(number),
+        }
+        rest = after;
+    }
+    out.push_str(rest);
+    out
+}
+
 impl Rule {
     /// The requirement in words, e.g. `> 0`.
     pub fn requirement(self) -> &'static str {
@@ -144,6 +166,20 @@ pub fn check_name(name: &str) -> Result<(), String> {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn numbers_written_out_in_full_are_shown_short() {
+        let long = format!("invalid type: floating point `{}`, expected u64", 1e300);
+        assert_eq!(
+            readable_numbers(&long),
+            "invalid type: floating point `1e300`, expected u64"
+        );
+        let tiny = format!("got {} at line 3", 1e-300);
+        assert_eq!(readable_numbers(&tiny), "got 1e-300 at line 3");
+        let plain = "line 12: 0.25 is not 3";
+        assert_eq!(readable_numbers(plain), plain);
+    }
+
     use super::*;
 
     #[test]

@@ -535,7 +535,7 @@ impl Scenario {
     pub fn from_str(text: &str, file: &Path) -> Result<Self, LoadError> {
         let raw: ScenarioFile = toml::from_str(text).map_err(|e| LoadError::Syntax {
             file: file.to_path_buf(),
-            message: e.to_string().trim_end().replace('\n', "\n  "),
+            message: crate::rule::readable_numbers(e.to_string().trim_end()).replace('\n', "\n  "),
         })?;
         let base = file.parent().unwrap_or(Path::new(""));
         let checker = Checker { file };

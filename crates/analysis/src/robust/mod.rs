@@ -37,6 +37,7 @@ pub mod statistics;
 pub mod table;
 pub mod tune;
 
+use fistage_model::rule::readable_numbers;
 use fistage_model::{LoadError, Loaded, Parameter, RobotSpec, Scenario};
 use serde::{Deserialize, Serialize};
 
@@ -205,7 +206,7 @@ impl RobustSpec {
             .clone()
             .ok_or_else(|| scenario.error("robust", "the scenario has no [robust] table"))?;
         let raw: RawRobust = raw.try_into().map_err(|e: toml::de::Error| {
-            scenario.error("robust", e.to_string().trim().to_string())
+            scenario.error("robust", readable_numbers(e.to_string().trim()))
         })?;
         let samples = samples.unwrap_or(raw.samples);
         if samples == 0 || samples > MAX_SAMPLES {
@@ -397,7 +398,14 @@ fn distribution_of(
         if low < high {
             Ok((low, high))
         } else {
-            Err(("high", format!("must be above low ({low}), got {high}")))
+            Err((
+                "high",
+                format!(
+                    "must be above low ({}), got {}",
+                    fistage_model::rule::show(low),
+                    fistage_model::rule::show(high)
+                ),
+            ))
         }
     };
     if entry.relative && nominal == 0.0 {
@@ -545,17 +553,17 @@ pub struct Summary {
 impl Summary {
     /// The summary of these results of `spec`.
     pub fn of(spec: &RobustSpec, results: &[SampleResult]) -> Self {
-        let linear: Vec<bool> = results
-            .iter()
+        // Verdicts of built stages only, so that no count exceeds `built`.
+        let built_stages = || results.iter().filter(|r| r.refused.is_none());
+        let linear: Vec<bool> = built_stages()
             .filter_map(|r| r.outcome.stable_linear)
             .collect();
-        let simulated: Vec<bool> = results
-            .iter()
+        let simulated: Vec<bool> = built_stages()
             .filter_map(|r| r.outcome.stable_sim)
             .collect();
         let analysis = spec.assessment.analysis;
         let count_false = |v: &[bool]| v.iter().filter(|s| !**s).count();
-        let built = results.iter().filter(|r| r.refused.is_none()).count();
+        let built = built_stages().count();
         let eig: Vec<(usize, f64)> = results
             .iter()
             .enumerate()

@@ -6,8 +6,6 @@
 //! round-trip form, so rows read back exactly, and a row is taken back only
 //! when its values are the ones its index draws.
 
-use std::path::Path;
-
 use super::{RobustSpec, SampleResult};
 use crate::assess::Outcome;
 
@@ -71,20 +69,10 @@ fn parse_number(cell: &str) -> Option<Option<f64>> {
     cell.parse::<f64>().ok().filter(|v| v.is_finite()).map(Some)
 }
 
-/// The rows of `path` that are samples of `spec` (others, and damaged
-/// rows such as a half-written last line, are skipped).
-pub fn read_rows(path: &Path, spec: &RobustSpec) -> Vec<SampleResult> {
-    let Ok(text) = std::fs::read_to_string(path) else {
-        return Vec::new();
-    };
+/// The sample a line written by [`row`] holds, if it is a sample of `spec`
+/// (its index in range and its values the ones that index draws).
+pub fn parse_row(line: &str, spec: &RobustSpec) -> Option<SampleResult> {
     let n_values = spec.columns().len();
-    text.lines()
-        .skip(1)
-        .filter_map(|line| parse_row(line, spec, n_values))
-        .collect()
-}
-
-fn parse_row(line: &str, spec: &RobustSpec, n_values: usize) -> Option<SampleResult> {
     let cells: Vec<&str> = line.split(',').collect();
     if cells.len() != 1 + n_values + VERDICTS.len() {
         return None;
@@ -109,6 +97,10 @@ fn parse_row(line: &str, spec: &RobustSpec, n_values: usize) -> Option<SampleRes
         bistable: parse_bool(verdicts[5])?,
     };
     let refused = (!verdicts[6].is_empty()).then(|| verdicts[6].to_string());
+    // A sample whose stage could not be built has no verdict.
+    if refused.is_some() && outcome != Outcome::default() {
+        return None;
+    }
     Some(SampleResult {
         index,
         values,

@@ -6,10 +6,23 @@
 //! replaced as a whole, so no file of the earlier result stays beside the new
 //! ones. A long command (a sweep) stages into a journal folder that outlives a
 //! failure, so that the next command resumes from it.
+//!
+//! Two commands never write one folder at once: each holds the folder's
+//! lock ([`FolderLock`]) from start to commit, and a second one is refused.
+//! The folder's contents when the command started are remembered
+//! ([`Listing`]); if they differ at commit (a file put there meanwhile), the
+//! folder is left as it is and the new result is kept beside it under a name
+//! the error gives.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
+
+mod listing;
+mod lock;
+
+use listing::Listing;
+use lock::FolderLock;
 
 /// A result being written: files go into [`OutputFolder::path`] until
 /// [`OutputFolder::commit`] moves them into place.
@@ -17,6 +30,10 @@ use anyhow::{Context, bail};
 pub struct OutputFolder {
     target: PathBuf,
     staging: PathBuf,
+    /// What the target held when the command started.
+    found: Listing,
+    /// Held until the folder is dropped: no other command writes the target.
+    _lock: FolderLock,
     /// Whether the staging folder is a journal that a failed command leaves.
     keep_on_failure: bool,
     committed: bool,
@@ -27,6 +44,8 @@ impl OutputFolder {
     /// folder holding files, unless `force`.
     pub fn begin(target: &Path, force: bool) -> anyhow::Result<Self> {
         refuse_file(target)?;
+        let lock = FolderLock::take(target)?;
+        let found = Listing::of(target)?;
         if holds_files(target) && !force {
             bail!(
                 "{}: holds an earlier result; give --force to replace it, or choose another folder with --out",
@@ -40,12 +59,7 @@ impl OutputFolder {
         }
         std::fs::create_dir(&staging)
             .with_context(|| format!("cannot create {}", staging.display()))?;
-        Ok(Self {
-            target: target.to_path_buf(),
-            staging,
-            keep_on_failure: false,
-            committed: false,
-        })
+        Ok(Self::staged(target, staging, (lock, found), false))
     }
 
     /// Starts (or takes up again) a long result for `target` whose staging
@@ -55,15 +69,28 @@ impl OutputFolder {
     /// [`holds_files`]).
     pub fn resumable(target: &Path) -> anyhow::Result<Self> {
         refuse_file(target)?;
+        let lock = FolderLock::take(target)?;
+        let found = Listing::of(target)?;
         let staging = staging_beside(target, "journal")?;
         std::fs::create_dir_all(&staging)
             .with_context(|| format!("cannot create {}", staging.display()))?;
-        Ok(Self {
+        Ok(Self::staged(target, staging, (lock, found), true))
+    }
+
+    fn staged(
+        target: &Path,
+        staging: PathBuf,
+        (lock, found): (FolderLock, Listing),
+        keep_on_failure: bool,
+    ) -> Self {
+        Self {
             target: target.to_path_buf(),
             staging,
-            keep_on_failure: true,
+            found,
+            _lock: lock,
+            keep_on_failure,
             committed: false,
-        })
+        }
     }
 
     /// Where the files go while the result is written.
@@ -71,8 +98,13 @@ impl OutputFolder {
         &self.staging
     }
 
-    /// Moves the finished result into place, replacing an earlier one whole.
+    /// Moves the finished result into place, replacing an earlier one whole,
+    /// if the target still holds what it held when the command started;
+    /// otherwise keeps the result beside it and says where.
     pub fn commit(mut self) -> anyhow::Result<PathBuf> {
+        if let Some(change) = self.found.change_in(&self.target)? {
+            return Err(self.keep_beside(&change));
+        }
         let earlier = self.staging.with_extension("earlier");
         if self.target.exists() {
             std::fs::rename(&self.target, &earlier).with_context(|| {
@@ -94,6 +126,39 @@ impl OutputFolder {
             })?;
         }
         Ok(self.target.clone())
+    }
+}
+
+impl OutputFolder {
+    /// The target changed under the command: the finished result moves to
+    /// a free name beside it, the target stays as it is.
+    fn keep_beside(&mut self, change: &str) -> anyhow::Error {
+        let name = self
+            .target
+            .file_name()
+            .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+        let parent = self.staging.parent().unwrap_or(Path::new("."));
+        let kept = (0..)
+            .map(|k| match k {
+                0 => parent.join(format!("{name}.new")),
+                k => parent.join(format!("{name}.new-{k}")),
+            })
+            .find(|path| !path.exists())
+            .unwrap_or_else(|| parent.join(format!("{name}.new")));
+        match std::fs::rename(&self.staging, &kept) {
+            Ok(()) => {
+                self.committed = true;
+                anyhow::anyhow!(
+                    "{}: changed while this command ran ({change}); it was left as it is, and the new result is in {}",
+                    self.target.display(),
+                    kept.display()
+                )
+            }
+            Err(e) => anyhow::anyhow!(
+                "{}: changed while this command ran ({change}); it was left as it is, and the new result could not be kept beside it ({e})",
+                self.target.display()
+            ),
+        }
     }
 }
 
