@@ -3,7 +3,7 @@
 //! the generic evaluation gives; a run too short to pay for compiling does
 //! not compile; every engine gives the same trajectory either way.
 
-use fistage_model::native::Function;
+use fistage_codegen::Function;
 use fistage_tests::{load, run};
 
 #[test]

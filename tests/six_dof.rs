@@ -482,8 +482,7 @@ fn evaluation_paths_follow_the_structure() {
     let pendulum = model_from(CART_PENDULUM, "robot = \"x\"\nduration = 1\n");
     assert_eq!(pendulum.evaluation_path(), EvaluationPath::General);
     // The general path compiles too, and its machine code gives its numbers.
-    let native = pendulum
-        .native(fistage_model::native::Function::Rhs)
+    let native = fistage_codegen::machine_code(&pendulum, fistage_codegen::Function::Rhs)
         .expect("the general path compiles");
     let mut rng = SplitMix(11);
     let inputs = fistage_model::InputValues {

@@ -430,7 +430,7 @@ impl Instance {
                 // The importer's integrator asks for the derivatives many
                 // times: the right-hand side as machine code (a model that
                 // does not compile is evaluated generically).
-                let _ = self.model.native(fistage_model::native::Function::Rhs);
+                let _ = fistage_codegen::machine_code(&self.model, fistage_codegen::Function::Rhs);
                 self.phase = Phase::EventMode;
             }
         }

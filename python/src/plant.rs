@@ -25,7 +25,7 @@ impl Plant {
         let excitation = ScenarioExcitation::from_scenario(&loaded.scenario);
         // An integrator calls the plant many times: its right-hand side as
         // machine code (a model that does not compile is evaluated generically).
-        let _ = loaded.model.native(fistage_model::native::Function::Rhs);
+        let _ = fistage_codegen::machine_code(&loaded.model, fistage_codegen::Function::Rhs);
         Ok(Self {
             loaded,
             excitation,

@@ -631,13 +631,13 @@ fn engine_table(args: &BenchArgs, scenario: &Path, rtols: &[f64]) -> anyhow::Res
 /// What was compiled to machine code for `model` and how long that took
 /// (once per model, before any timed run), or why nothing was.
 fn compile_note(model: &fistage_model::Model) -> String {
-    use fistage_model::native::{Function, NotCompiled};
+    use fistage_codegen::{Function, NotCompiled, machine_code};
     let parts: Vec<String> = [
         (Function::Rhs, "right-hand side"),
         (Function::ImplicitStage, "implicit bristle stage"),
     ]
     .into_iter()
-    .filter_map(|(function, name)| match model.native(function) {
+    .filter_map(|(function, name)| match machine_code(model, function) {
         Ok(native) => Some(format!(
             "{name} compiled to machine code in {:.1} ms ({} operations)",
             native.compile_time().as_secs_f64() * 1e3,

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Context;
-use fistage_model::native::Function;
+use fistage_codegen::{Function, machine_code};
 use fistage_model::{Inputs, Loaded, LugreParams};
 
 /// One bearing of the hand kernel.
@@ -177,7 +177,7 @@ pub fn rhs_table(repeat: usize) -> anyhow::Result<()> {
         }
         // A model compiles in a run after its first evaluations; here the
         // compiled column must be the machine code from the first call.
-        if let Err(why) = model.native(Function::Rhs) {
+        if let Err(why) = machine_code(model, Function::Rhs) {
             println!(
                 "`{case}`: the right-hand side is not compiled ({why}); its compiled column is the generic evaluation"
             );

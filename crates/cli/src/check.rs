@@ -7,7 +7,7 @@
 
 use std::path::PathBuf;
 
-use fistage_model::native::{Function, NotCompiled};
+use fistage_codegen::{Function, NotCompiled, machine_code};
 use fistage_model::{EvaluationPath, Frame, JointMotion, Model};
 
 /// Arguments of `fistage check`.
@@ -79,7 +79,7 @@ fn print_native(model: &Model) {
         (Function::Rhs, "right-hand side"),
         (Function::ImplicitStage, "implicit bristle stage"),
     ] {
-        match model.native(function) {
+        match machine_code(model, function) {
             Ok(native) => println!(
                 "{name}: machine code, {} operations, {} guarded branches, compiled in {:.1} ms",
                 native.operations(),

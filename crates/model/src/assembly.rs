@@ -684,7 +684,7 @@ impl<'a> Assembler<'a> {
             structure,
             evaluator,
             robot: robot.clone(),
-            native: Default::default(),
+            machine_code: Default::default(),
         })
     }
 }

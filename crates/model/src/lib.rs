@@ -17,10 +17,11 @@
 //!   per-thread [`Workspace`]; the evaluation is chosen once, when the model
 //!   is built, from its structure ([`EvaluationPath`]), and the exact
 //!   Jacobian ([`Model::jacobian`]) differentiates that same code.
-//!   [`Model::native`] records the evaluation and compiles it to machine
-//!   code ([`native`]): straight-line arithmetic with the model's numbers in
-//!   the instructions, checked to give the same numbers, which `Model::rhs`
-//!   and every engine then run (a run compiles after its first 10 000
+//!   The crate `fistage-codegen` records the evaluation and compiles it to
+//!   machine code ([`machine_code`]): straight-line arithmetic with the
+//!   model's numbers in the instructions, checked to give the same numbers,
+//!   which the model keeps ([`Model::compile_with`]) and `Model::rhs` and
+//!   every engine then run (a run compiles after its first 10 000
 //!   evaluations).
 //! - **The servo.** A PID on a sensor and an actuator, with optional
 //!   feedforward friction compensation (a LuGre or Dahl model driven by the
@@ -80,9 +81,9 @@ pub mod input;
 mod laws;
 pub mod linearize;
 pub mod lugre;
+pub mod machine_code;
 pub mod mat;
 pub mod model;
-pub mod native;
 pub mod output;
 pub mod parameter;
 pub mod reference;

@@ -14,7 +14,7 @@ use crate::elements::{
     Structure,
 };
 use crate::evaluator::Evaluator;
-use crate::native::{Function, Native, NotCompiled};
+use crate::machine_code::{Compiled, Function, MachineCode, NotCompiled};
 use crate::robot::RobotSpec;
 use crate::scalar::Scalar;
 
@@ -30,9 +30,9 @@ pub struct Model {
     /// The robot file after the scenario's overrides: what the parameter table reads.
     pub(crate) robot: RobotSpec,
     /// The right-hand side and the implicit bristle stage as machine code,
-    /// each compiled when [`Model::native`] is first called for it (shared
-    /// by the model's clones).
-    pub(crate) native: Arc<[OnceLock<Result<Native, NotCompiled>>; 2]>,
+    /// each compiled when [`Model::compile_with`] is first called for it
+    /// (shared by the model's clones).
+    pub(crate) machine_code: Arc<[OnceLock<Compiled>; 2]>,
 }
 
 impl Model {
@@ -125,7 +125,7 @@ impl Model {
 
     /// State derivative `dx = f(x, u)`. `x` and `dx` have [`Model::n_states`] entries.
     /// The evaluation depends on the structure (see [`EvaluationPath`]) and
-    /// runs as machine code once that is compiled ([`Model::native`]: the
+    /// runs as machine code once that is compiled ([`Model::compile_with`]: the
     /// engines ask for it when a run is long enough to pay for it);
     /// [`Model::rhs_general`] is the general path every model can take.
     #[inline]
@@ -139,28 +139,41 @@ impl Model {
         self.evaluator.rhs(&self.structure, x, &inputs, dx, ws);
     }
 
-    /// A function of the model as machine code ([`crate::native`]),
-    /// compiled on this call if it was not yet; or why it is not compiled, in which case
-    /// every evaluation runs the generic code ([`Model::rhs_of`],
-    /// [`Model::rhs_implicit_of`]). Both give the same numbers.
-    pub fn native(&self, function: Function) -> Result<&Native, &NotCompiled> {
-        self.native_slot(function)
-            .get_or_init(|| crate::native::compile(self, function))
-            .as_ref()
+    /// A function of the model as machine code, compiled by `compile` on
+    /// this call if no call compiled it before (the code generator is the
+    /// crate `fistage-codegen`, whose `machine_code` calls this); or why it
+    /// is not compiled, in which case every evaluation runs the generic code
+    /// ([`Model::rhs_of`], [`Model::rhs_implicit_of`]). Both give the same
+    /// numbers.
+    pub fn compile_with(
+        &self,
+        function: Function,
+        compile: impl FnOnce(&Model, Function) -> Compiled,
+    ) -> Result<&dyn MachineCode, &NotCompiled> {
+        match self
+            .native_slot(function)
+            .get_or_init(|| compile(self, function))
+        {
+            Ok(code) => Ok(code.as_ref()),
+            Err(why) => Err(why),
+        }
     }
 
     /// A function of the model as machine code if it has been compiled
     /// already (compiling takes about a millisecond per hundred operations:
     /// worth it for a run, not for one evaluation).
     #[inline]
-    pub fn compiled(&self, function: Function) -> Option<&Native> {
-        self.native_slot(function).get()?.as_ref().ok()
+    pub fn compiled(&self, function: Function) -> Option<&dyn MachineCode> {
+        match self.native_slot(function).get()? {
+            Ok(code) => Some(code.as_ref()),
+            Err(_) => None,
+        }
     }
 
-    fn native_slot(&self, function: Function) -> &OnceLock<Result<Native, NotCompiled>> {
+    fn native_slot(&self, function: Function) -> &OnceLock<Compiled> {
         match function {
-            Function::Rhs => &self.native[0],
-            Function::ImplicitStage => &self.native[1],
+            Function::Rhs => &self.machine_code[0],
+            Function::ImplicitStage => &self.machine_code[1],
         }
     }
 
@@ -173,7 +186,7 @@ impl Model {
             slot
         };
         Model {
-            native: Arc::new([off(), off()]),
+            machine_code: Arc::new([off(), off()]),
             ..self.clone()
         }
     }

@@ -218,7 +218,7 @@ mod tests {
     /// compiles its model's machine code.
     #[test]
     fn short_communication_steps_add_up_to_a_compiled_run() {
-        use fistage_model::native::Function;
+        use fistage_codegen::Function;
         let loaded = fig05b();
         let model = &loaded.model;
         let scenario = &loaded.scenario;

@@ -6,7 +6,7 @@
 //! that end on the friction law's kinks ([`KinkPredictor`]), the step
 //! budget and the mapping of integrator failures to [`SimError`].
 
-use fistage_model::native::{Function, Native};
+use fistage_codegen::{Function, MachineCode, machine_code};
 use fistage_model::{InputValues, Model, Workspace};
 use std::ops::ControlFlow;
 
@@ -97,7 +97,7 @@ enum TierState<'a> {
     /// Generic evaluation until the run has made enough evaluations.
     Generic,
     /// The machine code.
-    Compiled(&'a Native),
+    Compiled(&'a dyn MachineCode),
     /// The model does not compile (the generic code stays).
     Unavailable,
 }
@@ -129,7 +129,7 @@ impl<'a> Tier<'a> {
     /// run's countdown of generic evaluations has run out; `None`: evaluate
     /// generically (and count).
     #[inline]
-    fn next(&mut self, model: &'a Model, countdown: &mut u32) -> Option<&'a Native> {
+    fn next(&mut self, model: &'a Model, countdown: &mut u32) -> Option<&'a dyn MachineCode> {
         match self.state {
             TierState::Compiled(native) => Some(native),
             TierState::Unavailable => None,
@@ -138,7 +138,7 @@ impl<'a> Tier<'a> {
                 None
             }
             TierState::Generic => {
-                self.state = match model.native(self.function) {
+                self.state = match machine_code(model, self.function) {
                     Ok(native) => TierState::Compiled(native),
                     Err(_) => TierState::Unavailable,
                 };
@@ -372,7 +372,7 @@ mod tests {
         let loaded = fistage_model::load(&root.join("scenarios/coupling/friction20_traverse.toml"))
             .expect("loads");
         let model = &loaded.model;
-        model.native(Function::Rhs).expect("compiles");
+        machine_code(model, Function::Rhs).expect("compiles");
         let excitation = ScenarioExcitation::from_scenario(&loaded.scenario);
         let mut ws = model.workspace();
         let mut system = ModelSystem::new(model, &excitation, &mut ws);

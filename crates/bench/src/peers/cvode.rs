@@ -284,7 +284,7 @@ impl<'a> Session<'a> {
         let n = model.n_states();
         // The machine code the native engines run (a model that does not
         // compile is evaluated generically by both).
-        let _ = model.native(fistage_model::native::Function::Rhs);
+        let _ = fistage_codegen::machine_code(model, fistage_codegen::Function::Rhs);
         let plant = Box::new(Plant {
             model,
             excitation,

@@ -1,4 +1,4 @@
-//! The compiled right-hand side ([`fistage_model::native`]) against the
+//! The compiled right-hand side ([`fistage_codegen::machine_code`]) against the
 //! generic evaluation it was recorded from, on every shipped stage: the
 //! same numbers at states all over the operating range (sliding both ways,
 //! sticking, moving platform, servo inputs), a bail-out (not a wrong number)
@@ -7,7 +7,7 @@
 
 use std::path::{Path, PathBuf};
 
-use fistage_model::native::{Function, NotCompiled};
+use fistage_codegen::{Function, NotCompiled, machine_code};
 use fistage_model::{InputValues, Model};
 
 fn root() -> PathBuf {
@@ -86,7 +86,7 @@ fn compiled_functions_give_the_evaluations_numbers_on_every_shipped_stage() {
         let n = model.n_states();
         let mut numbers = Numbers(7);
         for function in [Function::Rhs, Function::ImplicitStage] {
-            let native = match model.native(function) {
+            let native = match machine_code(model, function) {
                 Ok(native) => native,
                 Err(NotCompiled::NoBristles) if function == Function::ImplicitStage => continue,
                 Err(other) => panic!("{name}: {function:?} not compiled: {other}"),
@@ -149,7 +149,7 @@ fn a_branch_the_other_way_gives_up_and_the_model_evaluates_as_before() {
     let loaded = fistage_model::load(&root().join("scenarios/coupling/friction20_traverse.toml"))
         .expect("loads");
     let model = &loaded.model;
-    let native = model.native(Function::Rhs).expect("the traverse compiles");
+    let native = machine_code(model, Function::Rhs).expect("the traverse compiles");
     assert!(native.guards() > 0, "the bushing rotations are guarded");
     let n = model.n_states();
     // Turn the table by 0.1 rad about z: the bushings' rotation logarithm
@@ -192,10 +192,10 @@ fn an_interpreted_model_compiles_nothing_and_gives_the_same_numbers() {
     let model = &loaded.model;
     let interpreted = model.interpreted();
     assert!(matches!(
-        interpreted.native(Function::Rhs),
+        machine_code(&interpreted, Function::Rhs),
         Err(NotCompiled::Disabled)
     ));
-    assert!(model.native(Function::Rhs).is_ok());
+    assert!(machine_code(model, Function::Rhs).is_ok());
     let mut numbers = Numbers(3);
     let (x, inputs) = state_and_inputs(model, &mut numbers);
     let inputs = fistage_model::Inputs {

@@ -27,7 +27,7 @@ use simba::scalar::SubsetOf;
 
 use super::calls::{Call1, Call2};
 use super::tape::{self, Holds, Node, NodeId, Slot};
-use crate::scalar::Scalar;
+use fistage_model::Scalar;
 
 /// A real number that records the operations done with it.
 #[derive(Clone, Copy)]

@@ -1,9 +1,10 @@
-//! The model's right-hand side as machine code.
+//! A fistage model's right-hand side as machine code: the only `unsafe`
+//! code of the model stack.
 //!
-//! The generic evaluation ([`crate::Model::rhs_of`]) runs once on
-//! [`Traced`] values, which record every floating-point operation it
-//! performs (module `tape`); that record is compiled to a native function
-//! (module `emit`, through Cranelift). Everything the structure decides (the evaluation
+//! The generic evaluation ([`Model::rhs_of`]) runs once on [`Traced`]
+//! values, which record every floating-point operation it performs (module
+//! `tape`); that record is compiled to a native function (module `emit`,
+//! through Cranelift). Everything the structure decides (the evaluation
 //! path, which elements exist, the servo's options, zero rows) is decided
 //! once, while recording; what is left is straight-line arithmetic with the
 //! model's numbers in the instructions, the cost a kernel written by hand for
@@ -22,8 +23,31 @@
 //! is not compiled at all ([`NotCompiled`]).
 //!
 //! Two functions are compiled: the right-hand side, and the implicit stage
-//! of the bristle states ([`crate::Model::rhs_implicit_bristles`]) when the
-//! model has any.
+//! of the bristle states ([`Model::rhs_implicit_bristles`]) when the model
+//! has any. The model keeps what [`machine_code`] compiled and runs it from
+//! [`Model::rhs`] from then on (the engines of `fistage-sim` compile once a
+//! run has made 10 000 evaluations).
+//!
+//! ```
+//! use fistage_codegen::{Function, machine_code};
+//!
+//! let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+//! let loaded = fistage_model::load(&root.join("scenarios/paper/fig05b_fi.toml"))?;
+//! let model = &loaded.model;
+//! let code = machine_code(model, Function::Rhs).expect("a rail stage compiles");
+//! assert!(code.operations() > 0 && code.guards() == 0);
+//!
+//! // The same derivative as the generic evaluation, now run as machine code.
+//! let x = model.zero_state();
+//! let inputs = fistage_model::Inputs::default();
+//! let (mut fast, mut generic) = (vec![0.0; x.len()], vec![0.0; x.len()]);
+//! model.rhs(&x, &inputs, &mut fast, &mut model.workspace());
+//! model
+//!     .interpreted()
+//!     .rhs(&x, &inputs, &mut generic, &mut model.workspace());
+//! assert_eq!(fast, generic);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 mod calls;
 mod emit;
@@ -34,8 +58,10 @@ use std::fmt;
 
 pub use traced::Traced;
 
-use crate::model::Model;
-use crate::values::InputValues;
+use fistage_model::machine_code::Compiled;
+pub use fistage_model::machine_code::{Bail, Function, MachineCode, NotCompiled};
+use fistage_model::{InputValues, Model};
+
 use emit::{Code, Generator, KernelFn};
 use tape::{Output, Slot, Tape};
 
@@ -62,81 +88,21 @@ impl fmt::Debug for Native {
     }
 }
 
-/// A compiled function found a branch of the evaluation going another way
-/// than when it was recorded, and stored nothing: evaluate as before.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Bail;
-
-/// Why a model's right-hand side is not compiled.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum NotCompiled {
-    /// The evaluation does something compiled code cannot repeat.
-    #[error("{0}")]
-    Unsupported(String),
-    /// The machine or the code generator could not produce the code.
-    #[error("no native code: {0}")]
-    CodeGeneration(String),
-    /// The compiled function disagreed with the evaluation on a check state.
-    #[error(
-        "the compiled {function} gave {compiled:e} for {quantity} where the evaluation gives {evaluated:e}"
-    )]
-    Disagrees {
-        /// Which function.
-        function: &'static str,
-        /// Which output.
-        quantity: String,
-        /// The compiled function's value.
-        compiled: f64,
-        /// The evaluation's value.
-        evaluated: f64,
-    },
-    /// The model has no bristle states, so no implicit stage.
-    #[error("the model has no bristle states")]
-    NoBristles,
-    /// Switched off for this model ([`Model::interpreted`]).
-    #[error("switched off")]
-    Disabled,
-}
-
-/// Which function of a model.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Function {
-    /// The right-hand side, as [`Model::rhs`].
-    Rhs,
-    /// The implicit stage of the bristle states, as
-    /// [`Model::rhs_implicit_bristles`].
-    ImplicitStage,
-}
-
-impl Function {
-    fn name(self) -> &'static str {
-        match self {
-            Self::Rhs => "right-hand side",
-            Self::ImplicitStage => "implicit bristle stage",
-        }
-    }
-}
-
-impl Native {
-    /// Floating-point operations in the compiled function.
-    pub fn operations(&self) -> usize {
+impl MachineCode for Native {
+    fn operations(&self) -> usize {
         self.operations
     }
 
-    /// Branches of the evaluation the compiled function checks.
-    pub fn guards(&self) -> usize {
+    fn guards(&self) -> usize {
         self.guards
     }
 
-    /// How long recording, compiling and checking it took.
-    pub fn compile_time(&self) -> std::time::Duration {
+    fn compile_time(&self) -> std::time::Duration {
         self.compile_time
     }
 
-    /// The state derivative at `x`, as [`Model::rhs`] (for the compiled
-    /// right-hand side).
     #[inline]
-    pub fn rhs(&self, x: &[f64], inputs: &InputValues<f64>, dx: &mut [f64]) -> Result<(), Bail> {
+    fn rhs(&self, x: &[f64], inputs: &InputValues<f64>, dx: &mut [f64]) -> Result<(), Bail> {
         if x.len() < self.n_states || dx.len() < self.n_states {
             return Err(Bail);
         }
@@ -150,10 +116,8 @@ impl Native {
         if status == 0 { Ok(()) } else { Err(Bail) }
     }
 
-    /// The implicit stage of the bristle states, as
-    /// [`Model::rhs_implicit_bristles`] (for the compiled implicit stage).
     #[inline]
-    pub fn implicit_stage(
+    fn implicit_stage(
         &self,
         x: &mut [f64],
         inputs: &InputValues<f64>,
@@ -234,7 +198,7 @@ fn trace(
             platform_velocity: input(3, inputs.platform_velocity),
         };
         let mut ws = model.workspace_of::<Traced>();
-        let mut dx = vec![<Traced as crate::Scalar>::constant(0.0); n];
+        let mut dx = vec![<Traced as fistage_model::Scalar>::constant(0.0); n];
         let mut outputs = Vec::with_capacity(n);
         if function == Function::ImplicitStage {
             let step = Traced::input(Slot::Step, 1e-5);
@@ -256,6 +220,17 @@ fn trace(
         outputs
     })
     .map_err(NotCompiled::Unsupported)
+}
+
+/// `function` of `model` as machine code: compiled on the first call for
+/// the model (or any clone of it) and kept by the model, which then runs it
+/// from [`Model::rhs`]; or why it is not compiled.
+pub fn machine_code(model: &Model, function: Function) -> Result<&dyn MachineCode, &NotCompiled> {
+    model.compile_with(function, compile_boxed)
+}
+
+fn compile_boxed(model: &Model, function: Function) -> Compiled {
+    compile(model, function).map(|native| Box::new(native) as Box<dyn MachineCode>)
 }
 
 /// Compiles `function` of `model` and checks it against the evaluation at
@@ -330,9 +305,9 @@ fn check(model: &Model, native: &Native, function: Function, seed: u64) -> Resul
 mod tests {
     use super::*;
 
-    fn shipped(scenario: &str) -> crate::Loaded {
+    fn shipped(scenario: &str) -> fistage_model::Loaded {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-        crate::load(&root.join(scenario)).expect("loads")
+        fistage_model::load(&root.join(scenario)).expect("loads")
     }
 
     /// The tape itself, evaluated in Rust, gives the evaluation's numbers:

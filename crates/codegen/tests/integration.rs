@@ -1,0 +1,6 @@
+//! The code generator's integration tests.
+//!
+//! One test binary per crate: every file of this folder is a module of it, so the
+//! crate graph is linked once for all of them.
+
+mod compiled;
