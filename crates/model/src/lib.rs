@@ -66,37 +66,23 @@
 #![warn(missing_docs)]
 
 pub mod assembly;
-pub mod body_motion;
-mod bristle;
-pub mod compensation;
-pub mod dahl;
-pub mod dynamics;
-pub mod eigen;
 pub mod elements;
-pub mod equilibrium;
 pub mod error;
-mod evaluator;
 pub mod excitation;
-pub mod input;
-mod laws;
-pub mod linearize;
-pub mod lugre;
+pub mod files;
+pub mod linear;
 pub mod machine_code;
-pub mod mat;
 pub mod model;
-pub mod output;
 pub mod parameter;
-pub mod reference;
-pub mod robot;
-mod rooted;
-mod rows;
+pub mod physics;
 pub mod rule;
-pub mod scalar;
-pub mod scenario;
-pub mod servo;
-mod translational;
-mod urdf_check;
-mod values;
+
+// The rooms' modules at the crate root, where users (and the crate) name them.
+pub(crate) use files::urdf_check;
+pub use files::{compensation, input, mat, output, reference, robot, scenario};
+pub use linear::{eigen, equilibrium, linearize, scalar};
+pub use physics::{body_motion, dahl, dynamics, lugre, servo};
+pub(crate) use physics::{bristle, evaluator, laws, rooted, rows, translational, values};
 
 pub use assembly::{Loaded, assemble, load};
 pub use dynamics::{ElementValues, EvaluationPath, InputValues, Workspace};
