@@ -21,6 +21,7 @@
 use fistage_model::{LoadError, Loaded, Parameter, RobotSpec};
 
 use crate::assess::{in_parallel, study_with};
+use crate::study::Study;
 use crate::sweep::Axis;
 
 /// One scenario of a comparison.
@@ -459,4 +460,33 @@ fn mean_std(values: &[f64]) -> (f64, f64) {
     let mean = values.iter().sum::<f64>() / n;
     let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n;
     (mean, var.sqrt())
+}
+
+impl Study for Comparison {
+    type Row = CompareRow;
+    const TABLE: &'static str = "points.csv";
+    const ITEMS: &'static str = "points";
+    fn len(&self) -> usize {
+        Comparison::len(self)
+    }
+    fn header(&self) -> String {
+        Comparison::header(self)
+    }
+    fn row(&self, row: &CompareRow) -> String {
+        Comparison::row(self, row)
+    }
+    fn index(row: &CompareRow) -> usize {
+        row.index
+    }
+    fn parse_row(&self, line: &str) -> Option<CompareRow> {
+        Comparison::parse_row(self, line)
+    }
+    fn compute(
+        &self,
+        indices: &[usize],
+        threads: usize,
+        done: &(dyn Fn(&CompareRow, usize) + Sync),
+    ) -> Vec<CompareRow> {
+        self.run(indices, threads, done)
+    }
 }

@@ -39,6 +39,7 @@ pub mod modes;
 pub mod record_lab;
 pub mod robust;
 pub mod routh;
+pub mod study;
 pub mod sweep;
 
 pub use eigen::{EigenPair, eigen_decomposition};

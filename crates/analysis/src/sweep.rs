@@ -37,6 +37,7 @@ use fistage_model::{LoadError, Loaded, Parameter, RobotSpec, Scenario};
 use serde::Deserialize;
 
 use crate::assess::{Assessment, in_parallel};
+use crate::study::{Provenance, Study, StudyError};
 
 /// Grid spacing along an axis.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
@@ -431,4 +432,90 @@ pub fn parse_row(line: &str, spec: &SweepSpec) -> Option<PointResult> {
         max_real_eig: number(cells[n_axes + 3]),
         bistable: flag(cells[n_axes + 4]),
     })
+}
+
+/// A sweep as a [`Study`] of grid points (journal, shards, resume, merge).
+pub struct SweepStudy<'a> {
+    /// The scenario, loaded.
+    pub loaded: &'a Loaded,
+    /// Its robot file as read (what the axes write into).
+    pub robot_file: &'a RobotSpec,
+    /// The grid and its analysis.
+    pub spec: &'a SweepSpec,
+}
+
+impl SweepStudy<'_> {
+    /// What decides the points' numbers, as shard `shard`: the program's
+    /// and the Python package's sweeps of one scenario agree on it, so their
+    /// shards merge.
+    pub fn provenance(&self, shard: Option<(usize, usize)>) -> Result<Provenance, StudyError> {
+        let spec = self.spec;
+        Provenance::of_study(
+            "sweep",
+            &self.loaded.scenario.file,
+            &self.loaded.scenario.robot,
+            &format!("{:?}", spec.axes),
+            &format!(
+                "{:?}, duration {:?}, oscillation threshold {:?}",
+                spec.analysis, spec.duration, spec.oscillation_threshold
+            ),
+            shard,
+        )
+    }
+
+    /// `points.json`: an object per point, a key per axis and verdict.
+    pub fn points_json(&self, results: &[PointResult]) -> String {
+        let json: Vec<serde_json::Value> = results
+            .iter()
+            .map(|r| {
+                let mut object = serde_json::Map::new();
+                for (axis, value) in self.spec.axes.iter().zip(&r.parameters) {
+                    object.insert(axis.parameter.clone(), serde_json::json!(value));
+                }
+                object.insert("stable_linear".into(), serde_json::json!(r.stable_linear));
+                object.insert("stable_sim".into(), serde_json::json!(r.stable_sim));
+                object.insert("amplitude".into(), serde_json::json!(r.amplitude));
+                object.insert("max_real_eig".into(), serde_json::json!(r.max_real_eig));
+                object.insert("bistable".into(), serde_json::json!(r.bistable));
+                serde_json::Value::Object(object)
+            })
+            .collect();
+        serde_json::to_string_pretty(&json).unwrap_or_default() + "\n"
+    }
+}
+
+impl Study for SweepStudy<'_> {
+    type Row = PointResult;
+    const TABLE: &'static str = "points.csv";
+    const ITEMS: &'static str = "points";
+    fn len(&self) -> usize {
+        self.spec.len()
+    }
+    fn header(&self) -> String {
+        header(self.spec)
+    }
+    fn row(&self, row: &PointResult) -> String {
+        self::row(row)
+    }
+    fn index(row: &PointResult) -> usize {
+        row.index
+    }
+    fn parse_row(&self, line: &str) -> Option<PointResult> {
+        parse_row(line, self.spec)
+    }
+    fn compute(
+        &self,
+        indices: &[usize],
+        threads: usize,
+        done: &(dyn Fn(&PointResult, usize) + Sync),
+    ) -> Vec<PointResult> {
+        run_points(
+            self.loaded,
+            self.robot_file,
+            self.spec,
+            indices,
+            threads,
+            done,
+        )
+    }
 }

@@ -6,7 +6,7 @@
 //! `settling_time_std`, `unsettled_steps`), `curves.csv` and `summary.json`
 //! (per case and first-axis value: the metric's mean and spread, the
 //! reduction against the baseline in percent), and plots of both. Journal,
-//! resume, shards and merge follow [`crate::study`].
+//! resume, shards and merge follow `fistage_analysis::study`.
 
 use std::path::{Path, PathBuf};
 
@@ -16,8 +16,9 @@ use fistage_analysis::sweep::{Spacing, SweepSpec};
 use fistage_model::RobotSpec;
 use fistage_plot::{Series, XyPlot, write_xy};
 
-use crate::provenance::Provenance;
-use crate::study::{self, Study, StudyArgs};
+use fistage_analysis::study::{Provenance, write_table};
+
+use crate::study::{self, StudyArgs};
 
 /// Arguments of `fistage compare`.
 #[derive(clap::Args)]
@@ -39,35 +40,6 @@ pub struct CompareArgs {
     /// Shards, merging, threads, resume.
     #[command(flatten)]
     pub study: StudyArgs,
-}
-
-impl Study for Comparison {
-    type Row = CompareRow;
-    const TABLE: &'static str = "points.csv";
-    const ITEMS: &'static str = "points";
-    fn len(&self) -> usize {
-        Comparison::len(self)
-    }
-    fn header(&self) -> String {
-        Comparison::header(self)
-    }
-    fn row(&self, row: &CompareRow) -> String {
-        Comparison::row(self, row)
-    }
-    fn index(row: &CompareRow) -> usize {
-        row.index
-    }
-    fn parse_row(&self, line: &str) -> Option<CompareRow> {
-        Comparison::parse_row(self, line)
-    }
-    fn compute(
-        &self,
-        indices: &[usize],
-        threads: usize,
-        done: &(dyn Fn(&CompareRow, usize) + Sync),
-    ) -> Vec<CompareRow> {
-        self.run(indices, threads, done)
-    }
 }
 
 /// The case of a scenario file.
@@ -133,7 +105,7 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
     let out_dir = args
         .out
         .clone()
-        .unwrap_or_else(|| crate::output::default_folder(&args.cases[0], "compare"));
+        .unwrap_or_else(|| fistage_model::output::default_folder(&args.cases[0], "compare"));
     let mut provenance = Provenance::of_study(
         "compare",
         &first.scenario.file,
@@ -154,7 +126,7 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
             )?;
     }
     let (folder, rows) = study::gather(&comparison, &args.study, &out_dir, &provenance)?;
-    study::write_table(&comparison, &rows, &folder)?;
+    write_table(&comparison, &rows, &folder)?;
     let curves = comparison.curves(&rows);
     write_curves(&comparison, &curves, folder.path())?;
     let pictures = draw(&comparison, &curves, folder.path())?;

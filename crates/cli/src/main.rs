@@ -12,9 +12,9 @@ mod identify;
 
 mod lyapunov;
 mod modes;
-mod output;
+
 mod progress;
-mod provenance;
+
 mod robust;
 mod run;
 mod shell;

@@ -11,7 +11,7 @@ use fistage_plot::{Series, XyPlot, write_xy};
 use fistage_sim::initial_state;
 use nalgebra::Vector3;
 
-use crate::output::OutputFolder;
+use fistage_model::output::ResultFolder;
 
 /// Which equilibria to analyse.
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -96,8 +96,8 @@ pub fn run(args: &ModesArgs) -> anyhow::Result<()> {
     let out_dir = args
         .out
         .clone()
-        .unwrap_or_else(|| crate::output::default_folder(&args.scenario, "modes"));
-    let folder = OutputFolder::begin(&out_dir, args.force)?;
+        .unwrap_or_else(|| fistage_model::output::default_folder(&args.scenario, "modes"));
+    let folder = ResultFolder::begin(&out_dir, args.force)?;
     let staging = folder.path();
     let json = serde_json::json!({
         "scenario": scenario.file.display().to_string(),

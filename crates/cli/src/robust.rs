@@ -6,17 +6,17 @@
 //! the sensitivity ranking) and plots: the histogram of the largest real part
 //! with zero marked, the probability of instability against each parameter,
 //! and the sensitivity ranking. Journal, resume, shards and merge follow
-//! [`crate::study`].
+//! `fistage_analysis::study`.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use fistage_analysis::robust::{RobustSpec, SampleResult, Summary, table};
+use fistage_analysis::robust::{RobustSpec, RobustStudy, SampleResult, Summary};
+use fistage_analysis::study::write_table;
 use fistage_model::RobotSpec;
 use fistage_plot::{Series, XyPlot, write_xy};
 
-use crate::provenance::Provenance;
-use crate::study::{self, Study, StudyArgs};
+use crate::study::{self, StudyArgs};
 
 /// Arguments of `fistage robust`.
 #[derive(clap::Args)]
@@ -37,43 +37,6 @@ pub struct RobustArgs {
     pub study: StudyArgs,
 }
 
-/// A tolerance analysis as a study of samples.
-struct Population<'a> {
-    loaded: &'a fistage_model::Loaded,
-    robot_file: &'a RobotSpec,
-    spec: &'a RobustSpec,
-}
-
-impl Study for Population<'_> {
-    type Row = SampleResult;
-    const TABLE: &'static str = "samples.csv";
-    const ITEMS: &'static str = "samples";
-    fn len(&self) -> usize {
-        self.spec.samples
-    }
-    fn header(&self) -> String {
-        table::header(self.spec)
-    }
-    fn row(&self, row: &SampleResult) -> String {
-        table::row(row)
-    }
-    fn index(row: &SampleResult) -> usize {
-        row.index
-    }
-    fn parse_row(&self, line: &str) -> Option<SampleResult> {
-        table::parse_row(line, self.spec)
-    }
-    fn compute(
-        &self,
-        indices: &[usize],
-        threads: usize,
-        done: &(dyn Fn(&SampleResult, usize) + Sync),
-    ) -> Vec<SampleResult> {
-        self.spec
-            .run(self.loaded, self.robot_file, indices, threads, done)
-    }
-}
-
 /// Runs the command.
 pub fn run(args: &RobustArgs) -> anyhow::Result<()> {
     let loaded = fistage_model::load(&args.scenario)?;
@@ -82,25 +45,15 @@ pub fn run(args: &RobustArgs) -> anyhow::Result<()> {
     let out_dir = args
         .out
         .clone()
-        .unwrap_or_else(|| crate::output::default_folder(&args.scenario, "robust"));
-    let provenance = Provenance::of_study(
-        "robust",
-        &loaded.scenario.file,
-        &loaded.scenario.robot,
-        &format!(
-            "{} samples, seed {}, {:?}, {:?}",
-            spec.samples, spec.seed, spec.sampling, spec.dimensions
-        ),
-        &format!("{:?}", spec.assessment),
-        args.study.shard()?,
-    )?;
-    let population = Population {
+        .unwrap_or_else(|| fistage_model::output::default_folder(&args.scenario, "robust"));
+    let population = RobustStudy {
         loaded: &loaded,
         robot_file: &robot_file,
         spec: &spec,
     };
+    let provenance = population.provenance(args.study.shard()?)?;
     let (folder, results) = study::gather(&population, &args.study, &out_dir, &provenance)?;
-    study::write_table(&population, &results, &folder)?;
+    write_table(&population, &results, &folder)?;
     let summary = Summary::of(&spec, &results);
     let json = folder.path().join("summary.json");
     std::fs::write(&json, serde_json::to_string_pretty(&summary)? + "\n")

@@ -10,8 +10,8 @@ use anyhow::Context;
 use fistage_model::EngineKind;
 use fistage_sim::RunOutput;
 
-use crate::output::OutputFolder;
 use crate::{figures, progress};
+use fistage_model::output::ResultFolder;
 
 /// Arguments of `fistage run`.
 #[derive(clap::Args)]
@@ -68,7 +68,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| default_out_dir(&args.scenario));
-    let folder = OutputFolder::begin(&out_dir, args.force)?;
+    let folder = ResultFolder::begin(&out_dir, args.force)?;
     let bar = progress::bar(&format!("run {}", args.scenario.display()));
     let output = fistage_sim::run_scenario(&loaded, &mut |f| {
         progress::set_fraction(&bar, f);

@@ -37,7 +37,8 @@ pub fn man(args: &ManArgs, command: clap::Command) -> anyhow::Result<()> {
     // The pages are made in a folder beside `out` and each moved over its
     // earlier version only when all are written: a failure leaves the
     // earlier pages as they were.
-    let staging = crate::output::staging_beside(&out, &format!("partial-{}", std::process::id()))?;
+    let staging =
+        fistage_model::output::staging_beside(&out, &format!("partial-{}", std::process::id()))?;
     let _ = std::fs::remove_dir_all(&staging);
     let made = std::fs::create_dir(&staging)
         .and_then(|()| clap_mangen::generate_to(command, &staging))

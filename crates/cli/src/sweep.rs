@@ -2,19 +2,17 @@
 //! scenario's `[sweep]` grid in parallel with a progress bar, write
 //! `points.csv` (a column per axis, then `stable_linear`, `stable_sim`,
 //! `amplitude`, `max_real_eig`, `bistable`), `points.json`, and a stability
-//! map. Journal, resume, shards and merge follow [`crate::study`].
+//! map. Journal, resume, shards and merge follow `fistage_analysis::study`.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use fistage_analysis::sweep::{
-    Analyses, PointResult, Spacing, SweepSpec, header, parse_row, row as row_text, run_points,
-};
+use fistage_analysis::study::write_table;
+use fistage_analysis::sweep::{Analyses, PointResult, Spacing, SweepSpec, SweepStudy};
 use fistage_model::RobotSpec;
 use fistage_plot::{ColourScale, Heatmap, Series, XyPlot, write_heatmap, write_xy};
 
-use crate::provenance::Provenance;
-use crate::study::{self, Study, StudyArgs};
+use crate::study::{self, StudyArgs};
 
 /// Arguments of `fistage sweep`.
 #[derive(clap::Args)]
@@ -29,49 +27,6 @@ pub struct SweepArgs {
     pub study: StudyArgs,
 }
 
-/// A sweep as a study of grid points.
-struct Grid<'a> {
-    loaded: &'a fistage_model::Loaded,
-    robot_file: &'a RobotSpec,
-    spec: &'a SweepSpec,
-}
-
-impl Study for Grid<'_> {
-    type Row = PointResult;
-    const TABLE: &'static str = "points.csv";
-    const ITEMS: &'static str = "points";
-    fn len(&self) -> usize {
-        self.spec.len()
-    }
-    fn header(&self) -> String {
-        header(self.spec)
-    }
-    fn row(&self, row: &PointResult) -> String {
-        row_text(row)
-    }
-    fn index(row: &PointResult) -> usize {
-        row.index
-    }
-    fn parse_row(&self, line: &str) -> Option<PointResult> {
-        parse_row(line, self.spec)
-    }
-    fn compute(
-        &self,
-        indices: &[usize],
-        threads: usize,
-        done: &(dyn Fn(&PointResult, usize) + Sync),
-    ) -> Vec<PointResult> {
-        run_points(
-            self.loaded,
-            self.robot_file,
-            self.spec,
-            indices,
-            threads,
-            done,
-        )
-    }
-}
-
 /// Runs the command.
 pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
     let loaded = fistage_model::load(&args.scenario)?;
@@ -81,26 +36,18 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
     let out_dir = args
         .out
         .clone()
-        .unwrap_or_else(|| crate::output::default_folder(&args.scenario, "sweep"));
-    let provenance = Provenance::of_study(
-        "sweep",
-        &loaded.scenario.file,
-        &loaded.scenario.robot,
-        &format!("{:?}", spec.axes),
-        &format!(
-            "{:?}, duration {:?}, oscillation threshold {:?}",
-            spec.analysis, spec.duration, spec.oscillation_threshold
-        ),
-        args.study.shard()?,
-    )?;
-    let grid = Grid {
+        .unwrap_or_else(|| fistage_model::output::default_folder(&args.scenario, "sweep"));
+    let grid = SweepStudy {
         loaded: &loaded,
         robot_file: &robot_file,
         spec: &spec,
     };
+    let provenance = grid.provenance(args.study.shard()?)?;
     let (folder, results) = study::gather(&grid, &args.study, &out_dir, &provenance)?;
-    study::write_table(&grid, &results, &folder)?;
-    write_json(&spec, &results, folder.path())?;
+    write_table(&grid, &results, &folder)?;
+    let json_path = folder.path().join("points.json");
+    std::fs::write(&json_path, grid.points_json(&results))
+        .with_context(|| format!("cannot write {}", json_path.display()))?;
     let pictures = draw(
         &crate::figures::figure_title(&loaded),
         &spec,
@@ -126,28 +73,6 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
         }
     );
     summarize(&results);
-    Ok(())
-}
-
-fn write_json(spec: &SweepSpec, results: &[PointResult], out_dir: &Path) -> anyhow::Result<()> {
-    let json: Vec<serde_json::Value> = results
-        .iter()
-        .map(|r| {
-            let mut object = serde_json::Map::new();
-            for (axis, value) in spec.axes.iter().zip(&r.parameters) {
-                object.insert(axis.parameter.clone(), serde_json::json!(value));
-            }
-            object.insert("stable_linear".into(), serde_json::json!(r.stable_linear));
-            object.insert("stable_sim".into(), serde_json::json!(r.stable_sim));
-            object.insert("amplitude".into(), serde_json::json!(r.amplitude));
-            object.insert("max_real_eig".into(), serde_json::json!(r.max_real_eig));
-            object.insert("bistable".into(), serde_json::json!(r.bistable));
-            serde_json::Value::Object(object)
-        })
-        .collect();
-    let json_path = out_dir.join("points.json");
-    std::fs::write(&json_path, serde_json::to_string_pretty(&json)? + "\n")
-        .with_context(|| format!("cannot write {}", json_path.display()))?;
     Ok(())
 }
 

@@ -14,8 +14,8 @@ use fistage_analysis::robust::tune::{Criterion, Population, TuneSettings, Tuning
 use fistage_model::RobotSpec;
 use fistage_plot::{ColourScale, Heatmap, Series, write_heatmap};
 
-use crate::output::OutputFolder;
 use crate::progress;
+use fistage_model::output::ResultFolder;
 
 /// Arguments of `fistage tune`.
 #[derive(clap::Args)]
@@ -116,8 +116,8 @@ pub fn run(args: &TuneArgs) -> anyhow::Result<()> {
     let out_dir = args
         .out
         .clone()
-        .unwrap_or_else(|| crate::output::default_folder(&args.scenario, "tune"));
-    let folder = OutputFolder::begin(&out_dir, args.force)?;
+        .unwrap_or_else(|| fistage_model::output::default_folder(&args.scenario, "tune"));
+    let folder = ResultFolder::begin(&out_dir, args.force)?;
     let population = Population::draw(&spec, &loaded, &robot_file, args.samples);
     if population.is_empty() {
         bail!(

@@ -34,6 +34,7 @@
 pub mod distribution;
 pub mod sampling;
 pub mod statistics;
+mod study;
 pub mod table;
 pub mod tune;
 
@@ -44,6 +45,7 @@ use serde::{Deserialize, Serialize};
 pub use distribution::Distribution;
 pub use sampling::{Design, Sampling};
 pub use statistics::{Probability, quantile, spearman};
+pub use study::RobustStudy;
 
 use crate::assess::{Analyses, Assessment, Outcome, in_parallel, study_with};
 

@@ -23,7 +23,7 @@ use super::shared::{
     OutputArgs, SimulateArgs, check_element, nothing_written, print_report, refuse_undetermined,
     short_name, unit_flag,
 };
-use crate::output::OutputFolder;
+use fistage_model::output::ResultFolder;
 
 #[derive(Args)]
 pub(super) struct SimulateStribeckArgs {
@@ -282,7 +282,7 @@ pub(super) fn run_stribeck(args: &StribeckArgs) -> Result<()> {
     let json = serde_json::to_string_pretty(&report)?;
     let verdict = refuse_undetermined(&args.output, &report.not_identifiable);
     if let (Some(target), true) = (&args.output.out, verdict.is_ok()) {
-        let folder = OutputFolder::begin(target, args.output.force)?;
+        let folder = ResultFolder::begin(target, args.output.force)?;
         let dir = folder.path();
         write_outputs(
             dir,
@@ -328,7 +328,7 @@ pub(super) fn run_frf(args: &FrfArgs) -> Result<()> {
     let json = serde_json::to_string_pretty(&report)?;
     let verdict = refuse_undetermined(&args.output, &report.not_identifiable);
     if let (Some(target), true) = (&args.output.out, verdict.is_ok()) {
-        let folder = OutputFolder::begin(target, args.output.force)?;
+        let folder = ResultFolder::begin(target, args.output.force)?;
         let dir = folder.path();
         write_outputs(
             dir,
@@ -394,7 +394,7 @@ fn read_stribeck_report(path: &Path) -> Result<StribeckReport> {
     Ok(report)
 }
 
-/// Writes the result files into `dir` (a staging folder of [`OutputFolder`]).
+/// Writes the result files into `dir` (a staging folder of [`ResultFolder`]).
 fn write_outputs(
     dir: &Path,
     json: &str,

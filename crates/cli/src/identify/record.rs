@@ -29,7 +29,7 @@ use super::shared::{
     OutputArgs, SimulateArgs, check_element, nothing_written, print_report, refuse_undetermined,
     short_name, unit_flag,
 };
-use crate::output::OutputFolder;
+use fistage_model::output::ResultFolder;
 
 /// The input conventions, for `--help`.
 const CONVENTIONS: &str = "\
@@ -193,7 +193,7 @@ pub fn run_record(args: &RecordArgs) -> Result<()> {
     let json = serde_json::to_string_pretty(&report)?;
     let verdict = refuse_undetermined(&args.output, &report.not_identifiable);
     if let (Some(target), true) = (&args.output.out, verdict.is_ok()) {
-        let folder = OutputFolder::begin(target, args.output.force)?;
+        let folder = ResultFolder::begin(target, args.output.force)?;
         write_record_outputs(folder.path(), &record, &fit, &report, &json, &args.output)?;
         folder.commit()?;
     }

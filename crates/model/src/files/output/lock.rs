@@ -8,9 +8,7 @@ use std::fs::{File, OpenOptions, TryLockError};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, bail};
-
-use super::staging_beside;
+use super::{OutputError, staging_beside};
 
 /// The held lock of one output folder; released (and its file removed) on drop.
 #[derive(Debug)]
@@ -21,7 +19,7 @@ pub struct FolderLock {
 
 impl FolderLock {
     /// Takes the lock of `target`, or refuses when another command holds it.
-    pub fn take(target: &Path) -> anyhow::Result<Self> {
+    pub fn take(target: &Path) -> Result<Self, OutputError> {
         let path = staging_beside(target, "lock")?;
         // The file a holder removes on release may be the one just opened:
         // then open the new one and lock again.
@@ -31,17 +29,16 @@ impl FolderLock {
                 .truncate(false)
                 .write(true)
                 .open(&path)
-                .with_context(|| format!("cannot open the lock {}", path.display()))?;
+                .map_err(OutputError::io("open the lock", &path))?;
             match file.try_lock() {
                 Ok(()) => {}
-                Err(TryLockError::WouldBlock) => bail!(
-                    "{}: another command is writing this folder now (its lock is {}); wait for it, or choose another --out",
-                    target.display(),
-                    path.display()
-                ),
-                Err(TryLockError::Error(e)) => {
-                    return Err(e).with_context(|| format!("cannot lock {}", path.display()));
+                Err(TryLockError::WouldBlock) => {
+                    return Err(OutputError::Locked {
+                        target: target.to_path_buf(),
+                        lock: path,
+                    });
                 }
+                Err(TryLockError::Error(e)) => return Err(OutputError::io("lock", &path)(e)),
             }
             if still_at(&file, &path) {
                 let mut lock = Self { path, file };
@@ -49,11 +46,10 @@ impl FolderLock {
                 return Ok(lock);
             }
         }
-        bail!(
-            "{}: cannot take its lock {} (other commands keep replacing it)",
-            target.display(),
-            path.display()
-        )
+        Err(OutputError::Locked {
+            target: target.to_path_buf(),
+            lock: path,
+        })
     }
 
     /// The holder's process id in the file, for a user wondering who holds it.
@@ -95,7 +91,7 @@ mod tests {
 
     #[test]
     fn a_second_holder_is_refused_until_the_first_lets_go() {
-        let dir = std::env::temp_dir().join(format!("fistage-lock-{}", std::process::id()));
+        let dir = std::env::temp_dir().join(format!("fistage-model-lock-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).expect("scratch");
         let target = dir.join("out");

@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::SystemTime;
 
-use anyhow::Context;
+use super::OutputError;
 
 /// The files under a folder (none when it does not exist), by relative path.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -16,7 +16,7 @@ pub struct Listing {
 
 impl Listing {
     /// What `folder` holds now.
-    pub fn of(folder: &Path) -> anyhow::Result<Self> {
+    pub fn of(folder: &Path) -> Result<Self, OutputError> {
         let mut listing = Self {
             files: BTreeMap::new(),
         };
@@ -24,18 +24,18 @@ impl Listing {
         Ok(listing)
     }
 
-    fn add(&mut self, folder: &Path, relative: &Path) -> anyhow::Result<()> {
+    fn add(&mut self, folder: &Path, relative: &Path) -> Result<(), OutputError> {
         let entries = match std::fs::read_dir(folder) {
             Ok(entries) => entries,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
-            Err(e) => return Err(e).with_context(|| format!("cannot read {}", folder.display())),
+            Err(e) => return Err(OutputError::io("read", folder)(e)),
         };
         for entry in entries {
-            let entry = entry.with_context(|| format!("cannot read {}", folder.display()))?;
+            let entry = entry.map_err(OutputError::io("read", folder))?;
             let name = relative.join(entry.file_name());
             let metadata = entry
                 .metadata()
-                .with_context(|| format!("cannot read {}", entry.path().display()))?;
+                .map_err(OutputError::io("read", entry.path()))?;
             if metadata.is_dir() {
                 self.files.insert(name.clone(), (0, None));
                 self.add(&entry.path(), &name)?;
@@ -49,7 +49,7 @@ impl Listing {
 
     /// How `folder` differs from this listing now (the first difference,
     /// in words), or `None` when it holds the same files.
-    pub fn change_in(&self, folder: &Path) -> anyhow::Result<Option<String>> {
+    pub fn change_in(&self, folder: &Path) -> Result<Option<String>, OutputError> {
         let now = Self::of(folder)?;
         let show = |path: &PathBuf| folder.join(path).display().to_string();
         for (path, found) in &self.files {
@@ -75,7 +75,8 @@ mod tests {
 
     #[test]
     fn added_changed_and_removed_files_are_named() {
-        let dir = std::env::temp_dir().join(format!("fistage-listing-{}", std::process::id()));
+        let dir =
+            std::env::temp_dir().join(format!("fistage-model-listing-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).expect("scratch");
         std::fs::write(dir.join("a.csv"), "1").expect("write");

@@ -1,4 +1,4 @@
-//! Output folders written whole or not at all. A command writes into a fresh
+//! Result folders written whole or not at all. A command writes into a fresh
 //! staging folder beside the target and moves it into place only when every
 //! file is written; a failed command leaves the target as it was (the staging
 //! folder is removed). A target that already holds files is an earlier
@@ -16,18 +16,14 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, bail};
+use super::OutputError;
+use super::listing::Listing;
+use super::lock::FolderLock;
 
-mod listing;
-mod lock;
-
-use listing::Listing;
-use lock::FolderLock;
-
-/// A result being written: files go into [`OutputFolder::path`] until
-/// [`OutputFolder::commit`] moves them into place.
+/// A result being written: files go into [`ResultFolder::path`] until
+/// [`ResultFolder::commit`] moves them into place.
 #[derive(Debug)]
-pub struct OutputFolder {
+pub struct ResultFolder {
     target: PathBuf,
     staging: PathBuf,
     /// What the target held when the command started.
@@ -39,26 +35,21 @@ pub struct OutputFolder {
     committed: bool,
 }
 
-impl OutputFolder {
+impl ResultFolder {
     /// Starts a result for `target`. Refuses a target that is a file, or a
     /// folder holding files, unless `force`.
-    pub fn begin(target: &Path, force: bool) -> anyhow::Result<Self> {
+    pub fn begin(target: &Path, force: bool) -> Result<Self, OutputError> {
         refuse_file(target)?;
         let lock = FolderLock::take(target)?;
         let found = Listing::of(target)?;
         if holds_files(target) && !force {
-            bail!(
-                "{}: holds an earlier result; give --force to replace it, or choose another folder with --out",
-                target.display()
-            );
+            return Err(OutputError::EarlierResult(target.to_path_buf()));
         }
         let staging = staging_beside(target, &format!("partial-{}", std::process::id()))?;
         if staging.exists() {
-            std::fs::remove_dir_all(&staging)
-                .with_context(|| format!("cannot clear {}", staging.display()))?;
+            std::fs::remove_dir_all(&staging).map_err(OutputError::io("clear", &staging))?;
         }
-        std::fs::create_dir(&staging)
-            .with_context(|| format!("cannot create {}", staging.display()))?;
+        std::fs::create_dir(&staging).map_err(OutputError::io("create", &staging))?;
         Ok(Self::staged(target, staging, (lock, found), false))
     }
 
@@ -67,13 +58,12 @@ impl OutputFolder {
     /// command, so that the next one resumes from what it holds. The caller
     /// decides what an earlier result in `target` means (see
     /// [`holds_files`]).
-    pub fn resumable(target: &Path) -> anyhow::Result<Self> {
+    pub fn resumable(target: &Path) -> Result<Self, OutputError> {
         refuse_file(target)?;
         let lock = FolderLock::take(target)?;
         let found = Listing::of(target)?;
         let staging = staging_beside(target, "journal")?;
-        std::fs::create_dir_all(&staging)
-            .with_context(|| format!("cannot create {}", staging.display()))?;
+        std::fs::create_dir_all(&staging).map_err(OutputError::io("create", &staging))?;
         Ok(Self::staged(target, staging, (lock, found), true))
     }
 
@@ -101,38 +91,35 @@ impl OutputFolder {
     /// Moves the finished result into place, replacing an earlier one whole,
     /// if the target still holds what it held when the command started;
     /// otherwise keeps the result beside it and says where.
-    pub fn commit(mut self) -> anyhow::Result<PathBuf> {
+    pub fn commit(mut self) -> Result<PathBuf, OutputError> {
         if let Some(change) = self.found.change_in(&self.target)? {
-            return Err(self.keep_beside(&change));
+            return Err(self.keep_beside(change));
         }
         let earlier = self.staging.with_extension("earlier");
         if self.target.exists() {
-            std::fs::rename(&self.target, &earlier).with_context(|| {
-                format!("cannot move the earlier {} aside", self.target.display())
-            })?;
+            std::fs::rename(&self.target, &earlier)
+                .map_err(OutputError::io("move aside the earlier", &self.target))?;
         }
         if let Err(e) = std::fs::rename(&self.staging, &self.target) {
             // Put the earlier result back: nothing is lost.
             if earlier.exists() {
                 let _ = std::fs::rename(&earlier, &self.target);
             }
-            return Err(e)
-                .with_context(|| format!("cannot move the result into {}", self.target.display()));
+            return Err(OutputError::io("move the result into", &self.target)(e));
         }
         self.committed = true;
         if earlier.exists() {
-            std::fs::remove_dir_all(&earlier).with_context(|| {
-                format!("cannot remove the earlier result {}", earlier.display())
-            })?;
+            std::fs::remove_dir_all(&earlier)
+                .map_err(OutputError::io("remove the earlier result", &earlier))?;
         }
         Ok(self.target.clone())
     }
 }
 
-impl OutputFolder {
+impl ResultFolder {
     /// The target changed under the command: the finished result moves to
     /// a free name beside it, the target stays as it is.
-    fn keep_beside(&mut self, change: &str) -> anyhow::Error {
+    fn keep_beside(&mut self, change: String) -> OutputError {
         let name = self
             .target
             .file_name()
@@ -145,19 +132,17 @@ impl OutputFolder {
             })
             .find(|path| !path.exists())
             .unwrap_or_else(|| parent.join(format!("{name}.new")));
-        match std::fs::rename(&self.staging, &kept) {
+        let kept = match std::fs::rename(&self.staging, &kept) {
             Ok(()) => {
                 self.committed = true;
-                anyhow::anyhow!(
-                    "{}: changed while this command ran ({change}); it was left as it is, and the new result is in {}",
-                    self.target.display(),
-                    kept.display()
-                )
+                Ok(kept)
             }
-            Err(e) => anyhow::anyhow!(
-                "{}: changed while this command ran ({change}); it was left as it is, and the new result could not be kept beside it ({e})",
-                self.target.display()
-            ),
+            Err(e) => Err(e.to_string()),
+        };
+        OutputError::Changed {
+            target: self.target.clone(),
+            change,
+            kept,
         }
     }
 }
@@ -175,32 +160,28 @@ pub fn holds_files(target: &Path) -> bool {
     std::fs::read_dir(target).is_ok_and(|mut entries| entries.next().is_some())
 }
 
-fn refuse_file(target: &Path) -> anyhow::Result<()> {
+fn refuse_file(target: &Path) -> Result<(), OutputError> {
     if target.is_file() {
-        bail!(
-            "{}: is a file, not an output folder; name a folder with --out",
-            target.display()
-        );
+        return Err(OutputError::IsAFile(target.to_path_buf()));
     }
     Ok(())
 }
 
 /// `.<name>.<tag>` in the target's parent folder (made if missing), on the
 /// same file system as the target, so that moving it into place is a rename.
-pub(crate) fn staging_beside(target: &Path, tag: &str) -> anyhow::Result<PathBuf> {
+pub fn staging_beside(target: &Path, tag: &str) -> Result<PathBuf, OutputError> {
     let parent = match target.parent() {
         Some(parent) if !parent.as_os_str().is_empty() => parent.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    std::fs::create_dir_all(&parent)
-        .with_context(|| format!("cannot create {}", parent.display()))?;
+    std::fs::create_dir_all(&parent).map_err(OutputError::io("create", &parent))?;
     let name = target
         .file_name()
         .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
     Ok(parent.join(format!(".{name}.{tag}")))
 }
 
-impl Drop for OutputFolder {
+impl Drop for ResultFolder {
     fn drop(&mut self) {
         if !self.committed && !self.keep_on_failure {
             let _ = std::fs::remove_dir_all(&self.staging);
@@ -214,7 +195,7 @@ mod tests {
 
     fn scratch(name: &str) -> PathBuf {
         let dir =
-            std::env::temp_dir().join(format!("fistage-output-{name}-{}", std::process::id()));
+            std::env::temp_dir().join(format!("fistage-folder-{name}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).expect("scratch");
         dir
@@ -224,15 +205,15 @@ mod tests {
     fn a_result_replaces_an_earlier_one_whole_and_only_when_forced() {
         let dir = scratch("replace");
         let target = dir.join("out");
-        let first = OutputFolder::begin(&target, false).expect("new folder");
+        let first = ResultFolder::begin(&target, false).expect("new folder");
         std::fs::write(first.path().join("a.csv"), "1").expect("write");
         std::fs::write(first.path().join("plot.svg"), "<svg/>").expect("write");
         first.commit().expect("commit");
         assert!(
-            OutputFolder::begin(&target, false).is_err(),
+            ResultFolder::begin(&target, false).is_err(),
             "an earlier result is refused"
         );
-        let second = OutputFolder::begin(&target, true).expect("forced");
+        let second = ResultFolder::begin(&target, true).expect("forced");
         std::fs::write(second.path().join("a.csv"), "2").expect("write");
         second.commit().expect("commit");
         assert_eq!(std::fs::read_to_string(target.join("a.csv")).unwrap(), "2");
@@ -251,7 +232,7 @@ mod tests {
         std::fs::create_dir_all(&target).expect("folder");
         std::fs::write(target.join("keep.csv"), "old").expect("write");
         {
-            let partial = OutputFolder::begin(&target, true).expect("forced");
+            let partial = ResultFolder::begin(&target, true).expect("forced");
             std::fs::write(partial.path().join("keep.csv"), "half").expect("write");
             // Dropped without commit: the command failed.
         }

@@ -8,11 +8,13 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use anyhow::{Context, bail};
+use fistage_model::output::OutputError;
 use serde::{Deserialize, Serialize};
 
+use super::StudyError;
+
 /// The file in every study folder.
-pub const FILE: &str = "provenance.json";
+pub const PROVENANCE_FILE: &str = "provenance.json";
 
 /// What produced a piece of work.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -43,10 +45,8 @@ impl Provenance {
         grid: &str,
         analysis: &str,
         shard: Option<(usize, usize)>,
-    ) -> anyhow::Result<Self> {
-        let read = |file: &Path| {
-            std::fs::read(file).with_context(|| format!("cannot read {}", file.display()))
-        };
+    ) -> Result<Self, StudyError> {
+        let read = |file: &Path| std::fs::read(file).map_err(OutputError::io("read", file));
         let mut items = BTreeMap::new();
         items.insert(
             "program".to_string(),
@@ -68,32 +68,42 @@ impl Provenance {
 
     /// Adds the content of another input file under `name` (a comparison's
     /// further cases, say): pieces merge only when it agrees too.
-    pub fn with_file(mut self, name: &str, file: &Path) -> anyhow::Result<Self> {
-        let bytes =
-            std::fs::read(file).with_context(|| format!("cannot read {}", file.display()))?;
+    pub fn with_file(mut self, name: &str, file: &Path) -> Result<Self, StudyError> {
+        let bytes = std::fs::read(file).map_err(OutputError::io("read", file))?;
         self.items.insert(name.to_string(), content_hash(&bytes));
         Ok(self)
     }
 
     /// Reads a folder's provenance; a folder without one holds no work of
     /// known origin.
-    pub fn read(folder: &Path) -> anyhow::Result<Option<Self>> {
-        let file = folder.join(FILE);
+    pub fn read(folder: &Path) -> Result<Option<Self>, StudyError> {
+        let file = folder.join(PROVENANCE_FILE);
         if !file.exists() {
             return Ok(None);
         }
-        let text = std::fs::read_to_string(&file)
-            .with_context(|| format!("cannot read {}", file.display()))?;
-        let provenance = serde_json::from_str(&text)
-            .with_context(|| format!("{}: not a provenance record", file.display()))?;
+        let text = std::fs::read_to_string(&file).map_err(OutputError::io("read", &file))?;
+        let provenance = serde_json::from_str(&text).map_err(|e| StudyError::BadProvenance {
+            path: file.clone(),
+            why: e.to_string(),
+        })?;
         Ok(Some(provenance))
     }
 
     /// Writes it into a folder.
-    pub fn write(&self, folder: &Path) -> anyhow::Result<()> {
-        let file = folder.join(FILE);
-        let text = serde_json::to_string_pretty(self)? + "\n";
-        std::fs::write(&file, text).with_context(|| format!("cannot write {}", file.display()))
+    pub fn write(&self, folder: &Path) -> Result<(), StudyError> {
+        let file = folder.join(PROVENANCE_FILE);
+        let text = serde_json::to_string_pretty(self).unwrap_or_default() + "\n";
+        Ok(std::fs::write(&file, text).map_err(OutputError::io("write", &file))?)
+    }
+
+    /// The kind of study in words, as errors name it.
+    fn kind(&self) -> &'static str {
+        match self.items.get("study").map(String::as_str) {
+            Some("sweep") => "sweep",
+            Some("robust") => "tolerance analysis",
+            Some("compare") => "comparison",
+            _ => "study",
+        }
     }
 
     /// The first item in which `other` differs from this one, if any.
@@ -113,19 +123,28 @@ impl Provenance {
             })
     }
 
-    /// Refuses the work in `folder` unless it has this provenance.
-    pub fn check_folder(&self, folder: &Path, what: &str) -> anyhow::Result<Self> {
+    /// Refuses the work (`items`) in `folder` unless it has this
+    /// provenance; `advice` says what to do instead.
+    pub fn check_folder(
+        &self,
+        folder: &Path,
+        items: &'static str,
+        advice: &'static str,
+    ) -> Result<Self, StudyError> {
         let Some(theirs) = Self::read(folder)? else {
-            bail!(
-                "{}: no {FILE}, so its points are of unknown origin; {what}",
-                folder.display()
-            );
+            return Err(StudyError::UnknownOrigin {
+                folder: folder.to_path_buf(),
+                items,
+                advice,
+            });
         };
         if let Some(difference) = self.first_difference(&theirs) {
-            bail!(
-                "{}: made by another sweep ({difference}); {what}",
-                folder.display()
-            );
+            return Err(StudyError::OtherWork {
+                folder: folder.to_path_buf(),
+                kind: self.kind(),
+                difference,
+                advice,
+            });
         }
         Ok(theirs)
     }
