@@ -17,6 +17,8 @@ summary.json); ``scenario.export_fmu(path)`` packages it as an FMU. Errors are s
 the program's messages.
 """
 
+import os
+
 from ._fistage import (
     Error,
     IdentificationError,
@@ -121,24 +123,47 @@ def _cell(text):
         return text
 
 
-def _sweep(self, threads=None, progress=None):
+def _study_flags(out, shard, merge, force, resume):
+    """The program's study flags as the extension takes them: ``shard`` as
+    "i/n" or (i, n), folders as strings."""
+    if isinstance(shard, (tuple, list)):
+        if len(shard) != 2:
+            raise ValueError("shard must be \"i/n\" or (i, n), got %r" % (shard,))
+        shard = "%d/%d" % (shard[0], shard[1])
+    return dict(out=None if out is None else os.fspath(out), shard=shard,
+                merge=None if merge is None else [os.fspath(m) for m in merge],
+                force=force, resume=resume)
+
+
+def _sweep(self, threads=None, progress=None, out=None, shard=None, merge=None, force=False, resume=True):
     """Runs the scenario's ``[sweep]`` grid as ``fistage sweep`` does (the
     interpreter released, ``threads`` threads, default all);
-    ``progress(done, total)`` after each chunk of points; Ctrl-C stops it. Returns a :class:`Study`
-    with the columns of points.csv (each axis, then stable_linear,
-    stable_sim, amplitude, max_real_eig, bistable)."""
-    return Study(self._sweep(threads=threads, progress=progress))
+    ``progress(done, total)`` after each chunk of points; Ctrl-C stops it.
+    Returns a :class:`Study` with the columns of points.csv (each axis, then
+    stable_linear, stable_sim, amplitude, max_real_eig, bistable).
+
+    As the program's flags: ``shard`` ("i/n" or (i, n)) computes every n-th
+    point from i; ``out`` writes the result folder (points.csv, points.json,
+    provenance.json) whole, journaled in ``.<out>.journal`` so a killed run
+    resumes (``resume=False`` recomputes); ``merge`` joins shard folders (the
+    program's too) into ``out``; ``force`` replaces other work there."""
+    flags = _study_flags(out, shard, merge, force, resume)
+    return Study(self._sweep(threads=threads, progress=progress, **flags))
 
 
-def _robust(self, samples=None, seed=None, threads=None, progress=None):
+def _robust(self, samples=None, seed=None, threads=None, progress=None, out=None, shard=None, merge=None,
+            force=False, resume=True):
     """Runs the scenario's ``[robust]`` tolerance analysis as ``fistage
     robust`` does: ``samples`` and ``seed`` replace the table's when given.
     Returns a :class:`Study` with the columns of samples.csv and
     ``summary`` as summary.json (probabilities with their intervals,
-    quantiles, sensitivities)."""
+    quantiles, sensitivities). ``out``, ``shard``, ``merge``, ``force`` and
+    ``resume`` as for :meth:`Scenario.sweep` (the folder holds samples.csv,
+    summary.json and provenance.json)."""
     import json
 
-    table, summary = self._robust(samples=samples, seed=seed, threads=threads, progress=progress)
+    flags = _study_flags(out, shard, merge, force, resume)
+    table, summary = self._robust(samples=samples, seed=seed, threads=threads, progress=progress, **flags)
     return Study(table, json.loads(summary))
 
 

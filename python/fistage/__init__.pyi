@@ -1,7 +1,7 @@
 """Type stubs of the fistage package."""
 
 from os import PathLike
-from typing import Callable, Any, Dict, List, Optional, Union
+from typing import Callable, Any, Dict, List, Optional, Tuple, Union
 
 import numpy
 import numpy.typing
@@ -75,10 +75,16 @@ class Scenario:
     def modes(self, equilibrium: str = "slipping") -> Dict[str, Any]:
         """The linearisation at an equilibrium, as modes.json, with numpy eigenvalues."""
     def sweep(self, threads: Optional[int] = None,
-              progress: Optional[Callable[[int, int], None]] = None) -> "Study":
-        """The scenario's [sweep] grid as `fistage sweep` computes it."""
+              progress: Optional[Callable[[int, int], None]] = None,
+              out: Union[str, PathLike, None] = None, shard: Union[str, Tuple[int, int], None] = None,
+              merge: Optional[List[Union[str, PathLike]]] = None, force: bool = False,
+              resume: bool = True) -> "Study":
+        """The scenario's [sweep] grid as `fistage sweep` computes it (journal, resume, shards, merge)."""
     def robust(self, samples: Optional[int] = None, seed: Optional[int] = None, threads: Optional[int] = None,
-               progress: Optional[Callable[[int, int], None]] = None) -> "Study":
+               progress: Optional[Callable[[int, int], None]] = None,
+               out: Union[str, PathLike, None] = None, shard: Union[str, Tuple[int, int], None] = None,
+               merge: Optional[List[Union[str, PathLike]]] = None, force: bool = False,
+               resume: bool = True) -> "Study":
         """The scenario's [robust] tolerance analysis as `fistage robust` computes it."""
     def export_fmu(self, path: Union[str, PathLike], library: Union[str, PathLike, None] = None) -> PathLike:
         """The scenario as an FMI 2.0 Co-Simulation FMU, as `fistage fmu` packages it."""

@@ -68,6 +68,19 @@ impl Scenario {
         Ok((scenario, robot))
     }
 
+    /// The scenario as a study's input: its text and its overrides.
+    fn input(&self) -> studies::ScenarioInput<'_> {
+        let overrides: Vec<String> = self
+            .overrides
+            .iter()
+            .map(|(path, value)| format!("{path}={value:e}"))
+            .collect();
+        studies::ScenarioInput {
+            text: &self.text,
+            overrides: overrides.join(", "),
+        }
+    }
+
     /// The study, loaded and checked, overrides applied.
     fn loaded(&self) -> Result<Loaded, LoadError> {
         let (scenario, robot) = self.study()?;
@@ -248,27 +261,40 @@ impl Scenario {
         Ok(result)
     }
 
-    /// sweep(threads=None, progress=None) -> (points.csv text): the
-    /// scenario's `[sweep]` grid as `fistage sweep` computes it, on `threads`
-    /// threads (default: all); `progress(done, total)` after each chunk of
-    /// points; Ctrl-C stops it.
+    /// sweep(threads=None, progress=None, out=None, shard=None, merge=None,
+    /// force=False, resume=True) -> (points.csv text): the scenario's
+    /// `[sweep]` grid as `fistage sweep` computes it, on `threads` threads
+    /// (default: all); `progress(done, total)` after each chunk of points;
+    /// Ctrl-C stops it (with `out`, the journal keeps what was done). With
+    /// `out` the result folder is written as the program writes it
+    /// (journal, resume, `shard` "i/n", `merge` of shard folders, `force`).
     /// The Python side turns it into numpy columns.
-    #[pyo3(signature = (threads=None, progress=None))]
+    #[pyo3(signature = (threads=None, progress=None, out=None, shard=None, merge=None, force=false, resume=true))]
+    #[allow(clippy::too_many_arguments)]
     fn _sweep(
         &self,
         py: Python<'_>,
         threads: Option<usize>,
         progress: Option<Py<PyAny>>,
+        out: Option<PathBuf>,
+        shard: Option<String>,
+        merge: Option<Vec<PathBuf>>,
+        force: bool,
+        resume: bool,
     ) -> PyResult<String> {
         let loaded = self.loaded().map_err(load_error)?;
         let (_, robot) = self.study().map_err(load_error)?;
-        studies::sweep(py, &loaded, &robot, threads, progress)
+        let call = studies::StudyCall::new(threads, progress, (out, shard, merge), force, resume);
+        studies::sweep(py, &loaded, &robot, &self.input(), &call)
     }
 
-    /// robust(samples=None, seed=None, threads=None, progress=None) ->
+    /// robust(samples=None, seed=None, threads=None, progress=None,
+    /// out=None, shard=None, merge=None, force=False, resume=True) ->
     /// (samples.csv text, summary.json text): the scenario's `[robust]`
-    /// tolerance analysis as `fistage robust` computes it.
-    #[pyo3(signature = (samples=None, seed=None, threads=None, progress=None))]
+    /// tolerance analysis as `fistage robust` computes it (`out` and the
+    /// rest as for sweep).
+    #[pyo3(signature = (samples=None, seed=None, threads=None, progress=None, out=None, shard=None, merge=None, force=false, resume=true))]
+    #[allow(clippy::too_many_arguments)]
     fn _robust(
         &self,
         py: Python<'_>,
@@ -276,10 +302,16 @@ impl Scenario {
         seed: Option<u64>,
         threads: Option<usize>,
         progress: Option<Py<PyAny>>,
+        out: Option<PathBuf>,
+        shard: Option<String>,
+        merge: Option<Vec<PathBuf>>,
+        force: bool,
+        resume: bool,
     ) -> PyResult<(String, String)> {
         let loaded = self.loaded().map_err(load_error)?;
         let (_, robot) = self.study().map_err(load_error)?;
-        studies::robust(py, &loaded, &robot, samples, seed, threads, progress)
+        let call = studies::StudyCall::new(threads, progress, (out, shard, merge), force, resume);
+        studies::robust(py, &loaded, &robot, &self.input(), (samples, seed), &call)
     }
 
     /// export_fmu(path, library=None, fmi_version=2) -> path: the scenario

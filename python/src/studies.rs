@@ -1,40 +1,43 @@
 //! The studies of a scenario from Python: its `[sweep]` grid and its
 //! `[robust]` tolerance analysis, computed as `fistage sweep` and `fistage
 //! robust` compute them (the interpreter released, in chunks between which
-//! Ctrl-C and the progress callback are heard), and the scenario packaged
-//! as an FMU. Results come back as the table text the program
+//! Ctrl-C and the progress callback are heard; with `out=` journaled into a
+//! result folder, resumed, sharded and merged by the same driver,
+//! `fistage_analysis::study`), and the scenario packaged as an FMU. Results come back as the table text the program
 //! writes (`points.csv`, `samples.csv`) and `summary.json`; the Python side
 //! turns them into numpy columns.
 
 use std::path::{Path, PathBuf};
 
 use fistage_analysis::assess::worker_threads;
-use fistage_analysis::robust::{RobustSpec, Summary, table};
-use fistage_analysis::sweep::{SweepSpec, header, row, run_points};
+use fistage_analysis::robust::{RobustSpec, RobustStudy, Summary};
+use fistage_analysis::study::{
+    Provenance, Study, StudyError, StudyOptions, StudyRun, merge, parse_shard, write_table,
+};
+use fistage_analysis::sweep::{SweepSpec, SweepStudy};
 use fistage_model::{Loaded, RobotSpec};
 use pyo3::prelude::*;
 
 use crate::{Error, LoadError_};
 
-/// Runs `compute` over `0..total` in chunks of a few points per thread,
+/// Runs `compute` over `indices` in chunks of a few items per thread,
 /// with the interpreter released; between chunks it takes the interpreter
 /// back, stops on Ctrl-C (or an exception from `progress`) and calls
 /// `progress(done, total)`.
 fn in_chunks<T: Send>(
     py: Python<'_>,
-    total: usize,
+    indices: &[usize],
     threads: usize,
     progress: Option<&Py<PyAny>>,
     compute: impl Fn(&[usize]) -> Vec<T> + Sync,
 ) -> PyResult<Vec<T>> {
     let chunk = (4 * threads).max(8);
-    let mut results = Vec::with_capacity(total);
-    let indices: Vec<usize> = (0..total).collect();
+    let mut results = Vec::with_capacity(indices.len());
     for part in indices.chunks(chunk) {
         results.extend(py.detach(|| compute(part)));
         py.check_signals()?;
         if let Some(callback) = progress {
-            callback.call1(py, (results.len(), total))?;
+            callback.call1(py, (results.len(), indices.len()))?;
         }
     }
     Ok(results)
@@ -45,26 +48,166 @@ fn threads_or_all(threads: Option<usize>) -> PyResult<usize> {
     worker_threads(threads).map_err(Error::new_err)
 }
 
+fn study_error(e: StudyError) -> PyErr {
+    Error::new_err(e.to_string())
+}
+
+/// How a study is run from Python: as the program's `--threads`,
+/// `--shard`, `--out`, `--merge`, `--force` and `--no-resume`.
+pub struct StudyCall {
+    /// Worker threads (default: all).
+    pub threads: Option<usize>,
+    /// `progress(done, total)` after each chunk.
+    pub progress: Option<Py<PyAny>>,
+    /// The result folder, journaled and resumed as the program's.
+    pub out: Option<PathBuf>,
+    /// `"i/n"`: only that shard.
+    pub shard: Option<String>,
+    /// Shard folders to merge into `out` instead of computing.
+    pub merge: Vec<PathBuf>,
+    /// Replace other work in `out`.
+    pub force: bool,
+    /// Take up items already done in `out` or its journal.
+    pub resume: bool,
+}
+
+impl StudyCall {
+    /// The call's flags as Python passes them (`merge=None` merges nothing).
+    pub fn new(
+        threads: Option<usize>,
+        progress: Option<Py<PyAny>>,
+        (out, shard, merge): (Option<PathBuf>, Option<String>, Option<Vec<PathBuf>>),
+        force: bool,
+        resume: bool,
+    ) -> Self {
+        Self {
+            threads,
+            progress,
+            out,
+            shard,
+            merge: merge.unwrap_or_default(),
+            force,
+            resume,
+        }
+    }
+}
+
+/// The rows of `study` (or of its shard): merged from shard folders,
+/// computed into `out` through its journal (resuming what is there), or
+/// computed in memory. A folder also gets the table, `extra` files and the
+/// provenance, and is committed whole.
+fn run_study<S: Study>(
+    py: Python<'_>,
+    study: &S,
+    call: &StudyCall,
+    provenance: impl FnOnce(Option<(usize, usize)>) -> Result<Provenance, StudyError>,
+    extra: impl FnOnce(&[S::Row], &Path) -> std::io::Result<()>,
+) -> PyResult<Vec<S::Row>> {
+    let threads = threads_or_all(call.threads)?;
+    let shard = call
+        .shard
+        .as_deref()
+        .map(parse_shard)
+        .transpose()
+        .map_err(study_error)?;
+    let options = StudyOptions {
+        shard,
+        no_resume: !call.resume,
+        force: call.force,
+    };
+    let compute = |part: &[usize], run: Option<&StudyRun<'_, S>>| {
+        study.compute(part, threads, &|row, _| {
+            if let Some(run) = run {
+                run.record(row);
+            }
+        })
+    };
+    let (folder, rows) = match (&call.out, call.merge.is_empty()) {
+        (None, true) => {
+            let mine: Vec<usize> = (0..study.len())
+                .filter(|k| shard.is_none_or(|(i, n)| k % n == i))
+                .collect();
+            let rows = in_chunks(py, &mine, threads, call.progress.as_ref(), |part| {
+                compute(part, None)
+            })?;
+            return Ok(rows);
+        }
+        (None, false) => {
+            return Err(Error::new_err(
+                "merge= needs out=, the folder to merge into",
+            ));
+        }
+        (Some(out), false) => {
+            let provenance = provenance(None).map_err(study_error)?;
+            merge(study, &call.merge, out, call.force, &provenance).map_err(study_error)?
+        }
+        (Some(out), true) => {
+            let provenance = provenance(shard).map_err(study_error)?;
+            let run = StudyRun::start(study, &options, out, &provenance).map_err(study_error)?;
+            let computed = in_chunks(py, run.todo(), threads, call.progress.as_ref(), |part| {
+                compute(part, Some(&run))
+            })?;
+            run.finish(computed)
+        }
+    };
+    write_table(study, &rows, &folder).map_err(study_error)?;
+    extra(&rows, folder.path()).map_err(|e| Error::new_err(e.to_string()))?;
+    folder.commit().map_err(|e| Error::new_err(e.to_string()))?;
+    Ok(rows)
+}
+
+/// The table's text as the program writes it.
+fn table_text<S: Study>(study: &S, rows: &[S::Row]) -> String {
+    let lines: Vec<String> = std::iter::once(study.header())
+        .chain(rows.iter().map(|r| study.row(r)))
+        .collect();
+    lines.join("\n") + "\n"
+}
+
+/// The scenario as a study input: its text, and the overrides made in
+/// Python (which the program's runs of the file do not have).
+pub struct ScenarioInput<'a> {
+    /// The scenario's TOML text.
+    pub text: &'a str,
+    /// `path=value` of every override, in order.
+    pub overrides: String,
+}
+
+impl ScenarioInput<'_> {
+    fn mark(&self, provenance: Provenance) -> Provenance {
+        if self.overrides.is_empty() {
+            provenance
+        } else {
+            provenance.with_item("overrides", self.overrides.clone())
+        }
+    }
+}
+
 /// The `[sweep]` grid: `points.csv` as text.
 pub fn sweep(
     py: Python<'_>,
     loaded: &Loaded,
     robot: &RobotSpec,
-    threads: Option<usize>,
-    progress: Option<Py<PyAny>>,
+    input: &ScenarioInput<'_>,
+    call: &StudyCall,
 ) -> PyResult<String> {
     let spec = SweepSpec::from_scenario(&loaded.scenario)
         .map_err(|e| LoadError_::new_err(e.to_string()))?;
     spec.check_against(&loaded.scenario, robot)
         .map_err(|e| LoadError_::new_err(e.to_string()))?;
-    let threads = threads_or_all(threads)?;
-    let results = in_chunks(py, spec.len(), threads, progress.as_ref(), |part| {
-        run_points(loaded, robot, &spec, part, threads, &|_, _| {})
-    })?;
-    let lines: Vec<String> = std::iter::once(header(&spec))
-        .chain(results.iter().map(row))
-        .collect();
-    Ok(lines.join("\n") + "\n")
+    let grid = SweepStudy {
+        loaded,
+        robot_file: robot,
+        spec: &spec,
+    };
+    let rows = run_study(
+        py,
+        &grid,
+        call,
+        |shard| Ok(input.mark(grid.provenance(Some(input.text.as_bytes()), shard)?)),
+        |rows, folder| std::fs::write(folder.join("points.json"), grid.points_json(rows)),
+    )?;
+    Ok(table_text(&grid, &rows))
 }
 
 /// The `[robust]` tolerance analysis: `samples.csv` as text and
@@ -73,24 +216,28 @@ pub fn robust(
     py: Python<'_>,
     loaded: &Loaded,
     robot: &RobotSpec,
-    samples: Option<usize>,
-    seed: Option<u64>,
-    threads: Option<usize>,
-    progress: Option<Py<PyAny>>,
+    input: &ScenarioInput<'_>,
+    (samples, seed): (Option<usize>, Option<u64>),
+    call: &StudyCall,
 ) -> PyResult<(String, String)> {
     let spec = RobustSpec::from_scenario(&loaded.scenario, robot, samples, seed)
         .map_err(|e| LoadError_::new_err(e.to_string()))?;
-    let threads = threads_or_all(threads)?;
-    let results = in_chunks(py, spec.samples, threads, progress.as_ref(), |part| {
-        spec.run(loaded, robot, part, threads, &|_, _| {})
-    })?;
-    let lines: Vec<String> = std::iter::once(table::header(&spec))
-        .chain(results.iter().map(table::row))
-        .collect();
-    let text = lines.join("\n") + "\n";
-    let summary = Summary::of(&spec, &results);
-    let json = serde_json::to_string(&summary).map_err(|e| Error::new_err(e.to_string()))?;
-    Ok((text, json))
+    let population = RobustStudy {
+        loaded,
+        robot_file: robot,
+        spec: &spec,
+    };
+    let summary_json = |rows: &[_]| {
+        serde_json::to_string_pretty(&Summary::of(&spec, rows)).unwrap_or_default() + "\n"
+    };
+    let rows = run_study(
+        py,
+        &population,
+        call,
+        |shard| Ok(input.mark(population.provenance(Some(input.text.as_bytes()), shard)?)),
+        |rows, folder| std::fs::write(folder.join("summary.json"), summary_json(rows)),
+    )?;
+    Ok((table_text(&population, &rows), summary_json(&rows)))
 }
 
 /// The FMU's shared library, built with this package (see `build.rs`).
@@ -136,7 +283,8 @@ pub fn export_fmu(
     };
     let bytes = fistage_fmi::build_fmu_from_text_version(text, file, &library, version)
         .map_err(|e| Error::new_err(e.to_string()))?;
-    std::fs::write(path, bytes)
+    // Written whole or not at all: a failed write leaves an earlier FMU.
+    fistage_model::output::write_whole(path, &bytes)
         .map_err(|e| Error::new_err(format!("{}: cannot write: {e}", path.display())))?;
     Ok(path.to_path_buf())
 }

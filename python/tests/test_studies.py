@@ -109,3 +109,40 @@ def test_threads_follow_the_programs_rule(root, threads):
     # same values by the same rule, before starting any thread.
     with pytest.raises(fistage.Error, match="threads must be from 1 to 1024"):
         small_sweep(root).sweep(threads=threads)
+
+
+def test_sweep_shards_merge_and_resume_as_the_program_does(root, tmp_path):
+    """Two shards written with out= merge into the whole run's points.csv
+    byte for byte; a folder holding one shard resumes into the whole run; a
+    killed run's journal with a cut last row is taken up and the cut row
+    computed again; a second study of another grid into that folder is
+    refused."""
+    scenario = small_sweep(root)
+    whole = scenario.sweep(out=tmp_path / "whole")
+    table = (tmp_path / "whole/points.csv").read_text()
+    assert len(whole) == 16 and table.count("\n") == 17
+    assert {"points.csv", "points.json", "provenance.json"} <= set(os.listdir(tmp_path / "whole"))
+    first = scenario.sweep(out=tmp_path / "s0", shard="0/2")
+    second = scenario.sweep(out=tmp_path / "s1", shard=(1, 2))
+    assert len(first) == 8 and len(second) == 8
+    scenario.sweep(out=tmp_path / "merged", merge=[tmp_path / "s0", tmp_path / "s1"])
+    assert (tmp_path / "merged/points.csv").read_text() == table
+    resumed = scenario.sweep(out=tmp_path / "s0")
+    assert len(resumed) == 16 and (tmp_path / "s0/points.csv").read_text() == table
+    lines = table.splitlines(keepends=True)
+    journal = tmp_path / ".killed.journal"
+    journal.mkdir()
+    (journal / "points.partial.csv").write_text("".join(lines[:6]) + lines[6][:-4])
+    (journal / "provenance.json").write_text((tmp_path / "whole/provenance.json").read_text())
+    scenario.sweep(out=tmp_path / "killed")
+    assert (tmp_path / "killed/points.csv").read_text() == table
+    assert not journal.exists()
+    other = fistage.Scenario.from_toml(
+        (root / "scenarios/paper/fig06a_rigid_vp20.toml").read_text()
+        .replace('analysis = "both"', 'analysis = "linear"').replace("points = 24", "points = 3"),
+        base_dir=root / "scenarios/paper")
+    with pytest.raises(fistage.Error, match="made by another sweep"):
+        other.sweep(out=tmp_path / "whole")
+    assert (tmp_path / "whole/points.csv").read_text() == table
+    with pytest.raises(fistage.Error, match="shard"):
+        scenario.sweep(shard="2/2")

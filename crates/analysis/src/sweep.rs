@@ -448,11 +448,17 @@ impl SweepStudy<'_> {
     /// What decides the points' numbers, as shard `shard`: the program's
     /// and the Python package's sweeps of one scenario agree on it, so their
     /// shards merge.
-    pub fn provenance(&self, shard: Option<(usize, usize)>) -> Result<Provenance, StudyError> {
+    /// `scenario_text`, when given, stands for the scenario file's content
+    /// (a scenario made in Python).
+    pub fn provenance(
+        &self,
+        scenario_text: Option<&[u8]>,
+        shard: Option<(usize, usize)>,
+    ) -> Result<Provenance, StudyError> {
         let spec = self.spec;
         Provenance::of_study(
             "sweep",
-            &self.loaded.scenario.file,
+            (&self.loaded.scenario.file, scenario_text),
             &self.loaded.scenario.robot,
             &format!("{:?}", spec.axes),
             &format!(

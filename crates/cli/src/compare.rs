@@ -108,7 +108,7 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
         .unwrap_or_else(|| fistage_model::output::default_folder(&args.cases[0], "compare"));
     let mut provenance = Provenance::of_study(
         "compare",
-        &first.scenario.file,
+        (&first.scenario.file, None),
         &first.scenario.robot,
         &format!("{:?}", comparison.axes),
         &format!("metric {}", metric.name()),

@@ -51,7 +51,7 @@ pub fn run(args: &RobustArgs) -> anyhow::Result<()> {
         robot_file: &robot_file,
         spec: &spec,
     };
-    let provenance = population.provenance(args.study.shard()?)?;
+    let provenance = population.provenance(None, args.study.shard()?)?;
     let (folder, results) = study::gather(&population, &args.study, &out_dir, &provenance)?;
     write_table(&population, &results, &folder)?;
     let summary = Summary::of(&spec, &results);

@@ -42,7 +42,7 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
         robot_file: &robot_file,
         spec: &spec,
     };
-    let provenance = grid.provenance(args.study.shard()?)?;
+    let provenance = grid.provenance(None, args.study.shard()?)?;
     let (folder, results) = study::gather(&grid, &args.study, &out_dir, &provenance)?;
     write_table(&grid, &results, &folder)?;
     let json_path = folder.path().join("points.json");

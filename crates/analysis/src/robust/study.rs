@@ -21,11 +21,17 @@ pub struct RobustStudy<'a> {
 impl RobustStudy<'_> {
     /// What decides the samples' numbers, as shard `shard` (the program's
     /// and the Python package's analyses of one scenario agree on it).
-    pub fn provenance(&self, shard: Option<(usize, usize)>) -> Result<Provenance, StudyError> {
+    /// `scenario_text`, when given, stands for the scenario file's content
+    /// (a scenario made in Python).
+    pub fn provenance(
+        &self,
+        scenario_text: Option<&[u8]>,
+        shard: Option<(usize, usize)>,
+    ) -> Result<Provenance, StudyError> {
         let spec = self.spec;
         Provenance::of_study(
             "robust",
-            &self.loaded.scenario.file,
+            (&self.loaded.scenario.file, scenario_text),
             &self.loaded.scenario.robot,
             &format!(
                 "{} samples, seed {}, {:?}, {:?}",

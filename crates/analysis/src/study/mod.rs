@@ -23,7 +23,7 @@
 //! let grid = SweepStudy { loaded: &loaded, robot_file: &robot, spec: &spec };
 //! let options = StudyOptions { shard: Some((0, 4)), ..StudyOptions::default() };
 //! let out = std::path::Path::new("out/fig06b-shard0");
-//! let run = StudyRun::start(&grid, &options, out, &grid.provenance(options.shard)?)?;
+//! let run = StudyRun::start(&grid, &options, out, &grid.provenance(None, options.shard)?)?;
 //! let new = grid.compute(run.todo(), 2, &|row, _| run.record(row));
 //! let (folder, rows) = run.finish(new);
 //! write_table(&grid, &rows, &folder)?;

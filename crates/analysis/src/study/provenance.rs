@@ -36,26 +36,28 @@ fn content_hash(bytes: &[u8]) -> String {
 
 impl Provenance {
     /// The provenance of a study of kind `study` (`sweep`, `robust`) of
-    /// `scenario_file` with this grid (or design) and these analysis
+    /// `scenario_file` (or, when given, the scenario text `scenario_text`
+    /// that stands for it) with this grid (or design) and these analysis
     /// settings (their debug form), as shard `shard`.
     pub fn of_study(
         study: &str,
-        scenario_file: &Path,
+        (scenario_file, scenario_text): (&Path, Option<&[u8]>),
         robot_file: &Path,
         grid: &str,
         analysis: &str,
         shard: Option<(usize, usize)>,
     ) -> Result<Self, StudyError> {
         let read = |file: &Path| std::fs::read(file).map_err(OutputError::io("read", file));
+        let scenario = match scenario_text {
+            Some(text) => text.to_vec(),
+            None => read(scenario_file)?,
+        };
         let mut items = BTreeMap::new();
         items.insert(
             "program".to_string(),
             format!("fistage {}", env!("CARGO_PKG_VERSION")),
         );
-        items.insert(
-            "scenario file".to_string(),
-            content_hash(&read(scenario_file)?),
-        );
+        items.insert("scenario file".to_string(), content_hash(&scenario));
         items.insert("robot file".to_string(), content_hash(&read(robot_file)?));
         items.insert("study".to_string(), study.to_string());
         items.insert("grid".to_string(), grid.to_string());
@@ -72,6 +74,13 @@ impl Provenance {
         let bytes = std::fs::read(file).map_err(OutputError::io("read", file))?;
         self.items.insert(name.to_string(), content_hash(&bytes));
         Ok(self)
+    }
+
+    /// Adds an item that must agree for pieces to merge (overrides made
+    /// outside the files, say).
+    pub fn with_item(mut self, name: &str, value: String) -> Self {
+        self.items.insert(name.to_string(), value);
+        self
     }
 
     /// Reads a folder's provenance; a folder without one holds no work of
