@@ -20,7 +20,7 @@ extern "C" {
 const char *fmi3GetVersion(void);
 
 /*
- fmi3SetDebugLogging: as fmi2SetDebugLogging.
+ fmi3SetDebugLogging: turns call traces on or off; categories must be declared ones.
 
  # Safety
  `categories` is null or points to `nCategories` strings.

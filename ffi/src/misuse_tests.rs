@@ -609,7 +609,7 @@ fn random_call_sequences_never_crash() {
 
 #[test]
 fn resource_locations_in_the_forms_importers_use() {
-    use crate::exports::resource_folder;
+    use crate::shared::c_args::resource_folder;
     for (uri, path) in [
         ("file:///tmp/unit/resources", "/tmp/unit/resources"),
         ("file:/tmp/unit/resources/", "/tmp/unit/resources/"),

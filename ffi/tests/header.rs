@@ -37,7 +37,7 @@ fn generated_header(config: &str, sources: &[&str], header: &str) -> String {
 fn checked_in_header_matches_the_code() {
     let generated = generated_header(
         "cbindgen.toml",
-        &["src/types.rs", "src/exports.rs"],
+        &["src/fmi2/types.rs", "src/fmi2/exports.rs"],
         "fistage_stage.h",
     );
     let functions = generated.matches("fmi2Status fmi2").count()

@@ -2,8 +2,8 @@
 //! same library. Each is a thin face over [`Instance`], through the same
 //! checks as the FMI 2.0 functions (live instance, array pointers and
 //! lengths, `catch_unwind`, every refusal explained through the importer's
-//! logger); where the C signature is FMI 2.0's, the FMI 2.0 function does
-//! the work. Functions for what the plant leaves out (clocks, Scheduled
+//! logger); where FMI 2.0 has the same call, the body is shared
+//! (`crate::shared::calls`) and only the name differs. Functions for what the plant leaves out (clocks, Scheduled
 //! Execution, configuration mode, types other than Float64) refuse with a
 //! reason; they are spelled out one by one rather than made by a macro, so
 //! that cbindgen (which does not expand macros) declares every one.
@@ -14,10 +14,12 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::PathBuf;
 
 use super::types::*;
-use crate::exports::{self as fmi2, input_slice, output_slice, register, text, with_slot};
-use crate::instance::{CallError, Instance, Interface};
-use crate::logger::Logger;
-use crate::types::Status;
+use crate::shared::c_args::{input_slice, output_slice, text};
+use crate::shared::calls;
+use crate::shared::instance::{CallError, Instance, Interface};
+use crate::shared::logger::Logger;
+use crate::shared::registry::{self, panic_text, register, with_slot};
+use crate::shared::status::Status;
 
 /// The value reference of the independent variable `time` (after every
 /// variable of [`crate::variables()`]).
@@ -62,10 +64,7 @@ fn guarded(
     catch_unwind(AssertUnwindSafe(body)).unwrap_or_else(|payload| {
         logger.error(
             Status::Fatal,
-            &format!(
-                "{call}: internal error ({})",
-                fmi2::panic_text(payload.as_ref())
-            ),
+            &format!("{call}: internal error ({})", panic_text(payload.as_ref())),
         );
         std::ptr::null_mut()
     })
@@ -77,7 +76,7 @@ pub extern "C" fn fmi3GetVersion() -> *const c_char {
     c"3.0".as_ptr()
 }
 
-/// fmi3SetDebugLogging: as fmi2SetDebugLogging.
+/// fmi3SetDebugLogging: turns call traces on or off; categories must be declared ones.
 ///
 /// # Safety
 /// `categories` is null or points to `nCategories` strings.
@@ -89,7 +88,15 @@ pub unsafe extern "C" fn fmi3SetDebugLogging(
     categories: *const fmi3String,
 ) -> fmi3Status {
     // SAFETY: by the caller's guarantee.
-    unsafe { fmi2::fmi2SetDebugLogging(instance, i32::from(loggingOn), nCategories, categories) }
+    unsafe {
+        calls::set_debug_logging(
+            instance,
+            "fmi3SetDebugLogging",
+            loggingOn,
+            nCategories,
+            categories,
+        )
+    }
 }
 
 /// fmi3InstantiateModelExchange: loads the robot and scenario from
@@ -208,7 +215,7 @@ pub unsafe extern "C" fn fmi3InstantiateScheduledExecution(
 /// fmi3FreeInstance.
 #[unsafe(no_mangle)]
 pub extern "C" fn fmi3FreeInstance(instance: fmi3Instance) {
-    fmi2::fmi2FreeInstance(instance);
+    registry::free(instance);
 }
 
 /// fmi3EnterInitializationMode: the experiment (tolerance, start, stop)
@@ -237,25 +244,29 @@ pub extern "C" fn fmi3EnterInitializationMode(
 /// to step mode.
 #[unsafe(no_mangle)]
 pub extern "C" fn fmi3ExitInitializationMode(instance: fmi3Instance) -> fmi3Status {
-    fmi2::fmi2ExitInitializationMode(instance)
+    calls::change(instance, "fmi3ExitInitializationMode", |i| {
+        i.exit_initialization().map(drop)
+    })
 }
 
 /// fmi3EnterEventMode (Model Exchange; Co-Simulation has no event mode).
 #[unsafe(no_mangle)]
 pub extern "C" fn fmi3EnterEventMode(instance: fmi3Instance) -> fmi3Status {
-    fmi2::fmi2EnterEventMode(instance)
+    calls::change(instance, "fmi3EnterEventMode", |i| {
+        i.enter_event_mode().map(drop)
+    })
 }
 
 /// fmi3Terminate.
 #[unsafe(no_mangle)]
 pub extern "C" fn fmi3Terminate(instance: fmi3Instance) -> fmi3Status {
-    fmi2::fmi2Terminate(instance)
+    calls::change(instance, "fmi3Terminate", |i| i.terminate().map(drop))
 }
 
 /// fmi3Reset.
 #[unsafe(no_mangle)]
 pub extern "C" fn fmi3Reset(instance: fmi3Instance) -> fmi3Status {
-    fmi2::fmi2Reset(instance)
+    calls::change(instance, "fmi3Reset", |i| i.reset().map(drop))
 }
 
 /// fmi3GetFloat64: every variable is Float64; `time` too.
@@ -985,13 +996,13 @@ pub unsafe extern "C" fn fmi3GetFMUState(
     FMUState: *mut fmi3FMUState,
 ) -> fmi3Status {
     // SAFETY: by the caller's guarantee.
-    unsafe { fmi2::fmi2GetFMUstate(instance, FMUState) }
+    unsafe { calls::get_state(instance, "fmi3GetFMUState", FMUState) }
 }
 
 /// fmi3SetFMUState.
 #[unsafe(no_mangle)]
 pub extern "C" fn fmi3SetFMUState(instance: fmi3Instance, FMUState: fmi3FMUState) -> fmi3Status {
-    fmi2::fmi2SetFMUstate(instance, FMUState)
+    calls::set_state(instance, "fmi3SetFMUState", FMUState)
 }
 
 /// fmi3FreeFMUState.
@@ -1004,7 +1015,7 @@ pub unsafe extern "C" fn fmi3FreeFMUState(
     FMUState: *mut fmi3FMUState,
 ) -> fmi3Status {
     // SAFETY: by the caller's guarantee.
-    unsafe { fmi2::fmi2FreeFMUstate(instance, FMUState) }
+    unsafe { calls::free_state(instance, "fmi3FreeFMUState", FMUState) }
 }
 
 /// fmi3SerializedFMUStateSize.
@@ -1018,7 +1029,7 @@ pub unsafe extern "C" fn fmi3SerializedFMUStateSize(
     size: *mut usize,
 ) -> fmi3Status {
     // SAFETY: by the caller's guarantee.
-    unsafe { fmi2::fmi2SerializedFMUstateSize(instance, FMUState, size) }
+    unsafe { calls::serialized_size(instance, "fmi3SerializedFMUStateSize", FMUState, size) }
 }
 
 /// fmi3SerializeFMUState.
@@ -1032,8 +1043,9 @@ pub unsafe extern "C" fn fmi3SerializeFMUState(
     serializedState: *mut fmi3Byte,
     size: usize,
 ) -> fmi3Status {
-    // SAFETY: by the caller's guarantee; bytes are bytes.
-    unsafe { fmi2::fmi2SerializeFMUstate(instance, FMUState, serializedState.cast(), size) }
+    let calls = ("fmi3SerializeFMUState", "fmi3SerializedFMUStateSize");
+    // SAFETY: by the caller's guarantee.
+    unsafe { calls::serialize(instance, calls, FMUState, serializedState, size) }
 }
 
 /// fmi3DeserializeFMUState.
@@ -1048,8 +1060,9 @@ pub unsafe extern "C" fn fmi3DeserializeFMUState(
     size: usize,
     FMUState: *mut fmi3FMUState,
 ) -> fmi3Status {
-    // SAFETY: by the caller's guarantee; bytes are bytes.
-    unsafe { fmi2::fmi2DeSerializeFMUstate(instance, serializedState.cast(), size, FMUState) }
+    let bytes = (serializedState, size);
+    // SAFETY: by the caller's guarantee.
+    unsafe { calls::deserialize(instance, "fmi3DeserializeFMUState", bytes, FMUState) }
 }
 
 /// fmi3GetDirectionalDerivative: outputs and state derivatives along a
@@ -1323,7 +1336,9 @@ pub unsafe extern "C" fn fmi3UpdateDiscreteStates(
 /// fmi3EnterContinuousTimeMode (Model Exchange).
 #[unsafe(no_mangle)]
 pub extern "C" fn fmi3EnterContinuousTimeMode(instance: fmi3Instance) -> fmi3Status {
-    fmi2::fmi2EnterContinuousTimeMode(instance)
+    calls::change(instance, "fmi3EnterContinuousTimeMode", |i| {
+        i.enter_continuous_time_mode().map(drop)
+    })
 }
 
 /// fmi3CompletedIntegratorStep (Model Exchange): never asks for an event
@@ -1341,7 +1356,7 @@ pub unsafe extern "C" fn fmi3CompletedIntegratorStep(
     let _ = noSetFMUStatePriorToCurrentPoint;
     // SAFETY: by the caller's guarantee.
     unsafe {
-        fmi2::completed_integrator_step(
+        calls::completed_integrator_step(
             instance,
             "fmi3CompletedIntegratorStep",
             [enterEventMode, terminateSimulation],
@@ -1353,7 +1368,7 @@ pub unsafe extern "C" fn fmi3CompletedIntegratorStep(
 /// fmi3SetTime (Model Exchange).
 #[unsafe(no_mangle)]
 pub extern "C" fn fmi3SetTime(instance: fmi3Instance, time: fmi3Float64) -> fmi3Status {
-    fmi2::fmi2SetTime(instance, time)
+    calls::change(instance, "fmi3SetTime", |i| i.set_time(time).map(drop))
 }
 
 /// fmi3SetContinuousStates (Model Exchange).
@@ -1367,7 +1382,14 @@ pub unsafe extern "C" fn fmi3SetContinuousStates(
     nContinuousStates: usize,
 ) -> fmi3Status {
     // SAFETY: by the caller's guarantee.
-    unsafe { fmi2::fmi2SetContinuousStates(instance, continuousStates, nContinuousStates) }
+    unsafe {
+        calls::set_continuous_states(
+            instance,
+            "fmi3SetContinuousStates",
+            continuousStates,
+            nContinuousStates,
+        )
+    }
 }
 
 /// fmi3GetContinuousStateDerivatives (Model Exchange).
@@ -1380,8 +1402,16 @@ pub unsafe extern "C" fn fmi3GetContinuousStateDerivatives(
     derivatives: *mut fmi3Float64,
     nContinuousStates: usize,
 ) -> fmi3Status {
+    let array = (derivatives, nContinuousStates);
     // SAFETY: by the caller's guarantee.
-    unsafe { fmi2::fmi2GetDerivatives(instance, derivatives, nContinuousStates) }
+    unsafe {
+        calls::real_array(
+            instance,
+            "fmi3GetContinuousStateDerivatives",
+            array,
+            |i, v| i.get_derivatives(v),
+        )
+    }
 }
 
 /// fmi3GetEventIndicators (Model Exchange): none.
@@ -1394,8 +1424,13 @@ pub unsafe extern "C" fn fmi3GetEventIndicators(
     eventIndicators: *mut fmi3Float64,
     nEventIndicators: usize,
 ) -> fmi3Status {
+    let array = (eventIndicators, nEventIndicators);
     // SAFETY: by the caller's guarantee.
-    unsafe { fmi2::fmi2GetEventIndicators(instance, eventIndicators, nEventIndicators) }
+    unsafe {
+        calls::real_array(instance, "fmi3GetEventIndicators", array, |i, v| {
+            i.get_event_indicators(v.len())
+        })
+    }
 }
 
 /// fmi3GetContinuousStates (Model Exchange).
@@ -1408,8 +1443,13 @@ pub unsafe extern "C" fn fmi3GetContinuousStates(
     continuousStates: *mut fmi3Float64,
     nContinuousStates: usize,
 ) -> fmi3Status {
+    let array = (continuousStates, nContinuousStates);
     // SAFETY: by the caller's guarantee.
-    unsafe { fmi2::fmi2GetContinuousStates(instance, continuousStates, nContinuousStates) }
+    unsafe {
+        calls::real_array(instance, "fmi3GetContinuousStates", array, |i, v| {
+            i.get_continuous_states(v)
+        })
+    }
 }
 
 /// fmi3GetNominalsOfContinuousStates (Model Exchange).
@@ -1422,8 +1462,16 @@ pub unsafe extern "C" fn fmi3GetNominalsOfContinuousStates(
     nominals: *mut fmi3Float64,
     nContinuousStates: usize,
 ) -> fmi3Status {
+    let array = (nominals, nContinuousStates);
     // SAFETY: by the caller's guarantee.
-    unsafe { fmi2::fmi2GetNominalsOfContinuousStates(instance, nominals, nContinuousStates) }
+    unsafe {
+        calls::real_array(
+            instance,
+            "fmi3GetNominalsOfContinuousStates",
+            array,
+            |i, v| i.get_nominals(v),
+        )
+    }
 }
 
 /// A count for an `size_t*` argument.

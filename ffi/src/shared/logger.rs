@@ -6,8 +6,9 @@
 
 use std::ffi::{CString, c_int};
 
+use super::status::Status;
+use crate::fmi2::types::{fmi2CallbackFunctions, fmi2CallbackLogger, fmi2ComponentEnvironment};
 use crate::fmi3::types::fmi3LogMessageCallback;
-use crate::types::{Status, fmi2CallbackFunctions, fmi2CallbackLogger, fmi2ComponentEnvironment};
 
 /// The importer's callback, of either standard.
 #[derive(Clone, Copy)]

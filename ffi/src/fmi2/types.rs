@@ -68,16 +68,6 @@ pub struct fmi2CallbackFunctions {
     pub componentEnvironment: fmi2ComponentEnvironment,
 }
 
-/// `fmi2Status` values.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[repr(i32)]
-pub(crate) enum Status {
-    Ok = 0,
-    Discard = 2,
-    Error = 3,
-    Fatal = 4,
-}
-
 /// `fmi2Type` value of Model Exchange.
 pub(crate) const MODEL_EXCHANGE: c_int = 0;
 /// `fmi2Type` value of Co-Simulation.

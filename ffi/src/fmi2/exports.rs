@@ -1,212 +1,28 @@
 //! The 44 FMI 2.0 functions (common, Model Exchange and Co-Simulation), as
-//! `extern "C"` symbols. Each is a
-//! thin face over [`Instance`]: it checks the instance pointer against the set
-//! of live instances, checks the array pointers, runs the call inside
-//! `catch_unwind` (a panic becomes fmi2Fatal and a log message, never an
-//! unwind into the host), and reports every refusal through the importer's
-//! logger.
+//! `extern "C"` symbols. Each is a thin face over [`Instance`] through the
+//! shared registry (`crate::shared`): it checks the instance pointer against
+//! the set of live instances, checks the array pointers, runs the call
+//! inside `catch_unwind` (a panic becomes fmi2Fatal and a log message, never
+//! an unwind into the host), and reports every refusal through the
+//! importer's logger. Where FMI 3.0 has the same call, the body is shared
+//! (`crate::shared::calls`) and only the name differs.
 #![allow(non_snake_case)] // parameter names as in the FMI 2.0 standard
 
-use std::collections::{BTreeSet, VecDeque};
-use std::ffi::{CStr, c_char};
+use std::ffi::c_char;
 use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::path::PathBuf;
-use std::sync::{Mutex, MutexGuard};
 
-use crate::instance::{CallError, Instance, Interface};
-use crate::logger::{LOG_CATEGORIES, Logger};
-use crate::phase::Phase;
-use crate::state::Snapshot;
-use crate::types::{
-    CO_SIMULATION, MODEL_EXCHANGE, Status, fmi2Boolean, fmi2Byte, fmi2CallbackFunctions,
-    fmi2Component, fmi2EventInfo, fmi2FMUstate, fmi2Integer, fmi2Real, fmi2Status, fmi2StatusKind,
-    fmi2String, fmi2Type, fmi2ValueReference, status_kind,
+use super::types::{
+    CO_SIMULATION, MODEL_EXCHANGE, fmi2Boolean, fmi2Byte, fmi2CallbackFunctions, fmi2Component,
+    fmi2EventInfo, fmi2FMUstate, fmi2Integer, fmi2Real, fmi2Status, fmi2StatusKind, fmi2String,
+    fmi2Type, fmi2ValueReference, status_kind,
 };
-
-/// An instance with its logger and the FMU states it handed out.
-pub(crate) struct Slot {
-    pub(crate) instance: Instance,
-    pub(crate) logger: Logger,
-    states: BTreeSet<usize>,
-}
-
-/// Addresses of live instances: a call with any other pointer is refused.
-static LIVE: Mutex<BTreeSet<usize>> = Mutex::new(BTreeSet::new());
-/// Loggers of recently freed instances, to say why a late call is refused.
-static FREED: Mutex<VecDeque<(usize, Logger)>> = Mutex::new(VecDeque::new());
-const FREED_REMEMBERED: usize = 64;
-
-fn lock<T>(mutex: &Mutex<T>) -> MutexGuard<'_, T> {
-    mutex
-        .lock()
-        .unwrap_or_else(|poisoned| poisoned.into_inner())
-}
-
-pub(crate) fn code(status: Status) -> fmi2Status {
-    status as fmi2Status
-}
-
-pub(crate) fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
-    payload
-        .downcast_ref::<&str>()
-        .map(|s| (*s).to_string())
-        .or_else(|| payload.downcast_ref::<String>().cloned())
-        .unwrap_or_else(|| "unknown panic".into())
-}
-
-/// Runs `body` on the instance behind `c`, if it is live and usable.
-pub(crate) fn with_slot(
-    c: fmi2Component,
-    call: &'static str,
-    body: impl FnOnce(&mut Slot) -> Result<Status, CallError>,
-) -> fmi2Status {
-    if c.is_null() {
-        return code(Status::Error);
-    }
-    let address = c as usize;
-    if !lock(&LIVE).contains(&address) {
-        // Copy the logger out so no lock is held while the importer's code runs.
-        let freed = lock(&FREED)
-            .iter()
-            .find(|(a, _)| *a == address)
-            .map(|(_, logger)| logger.clone());
-        if let Some(logger) = freed {
-            logger.error(
-                Status::Error,
-                &format!("{call}: the instance was already freed by fmi2FreeInstance"),
-            );
-        }
-        return code(Status::Error);
-    }
-    let slot = c.cast::<Slot>();
-    // SAFETY: the address is live, so it is a Box<Slot> made by
-    // fmi2Instantiate and not yet freed; FMI forbids concurrent calls on one instance.
-    let phase = unsafe { (*slot).instance.phase() };
-    if phase == Phase::Fatal {
-        // SAFETY: as above.
-        unsafe { &*slot }.logger.error(
-            Status::Error,
-            &format!("{call}: the instance had a fatal error; only fmi2FreeInstance is allowed"),
-        );
-        return code(Status::Error);
-    }
-    // SAFETY: as above; the reference does not outlive this call.
-    let outcome = catch_unwind(AssertUnwindSafe(|| body(unsafe { &mut *slot })));
-    // SAFETY: as above; the closure's borrow has ended.
-    let slot = unsafe { &mut *slot };
-    match outcome {
-        Ok(Ok(status)) => {
-            slot.logger.trace(&format!("{call}: ok"));
-            code(status)
-        }
-        Ok(Err(error)) => {
-            slot.logger
-                .error(Status::Error, &format!("{call}: {error}"));
-            code(Status::Error)
-        }
-        Err(payload) => {
-            slot.instance.poison();
-            slot.logger.error(
-                Status::Fatal,
-                &format!(
-                    "{call}: internal error ({}); the instance is unusable",
-                    panic_text(payload.as_ref())
-                ),
-            );
-            code(Status::Fatal)
-        }
-    }
-}
-
-/// A slice from a C array; null is allowed only for an empty array.
-///
-/// # Safety
-/// A non-null `pointer` points to `n` valid elements.
-pub(crate) unsafe fn input_slice<'a, T>(
-    pointer: *const T,
-    n: usize,
-    what: &str,
-) -> Result<&'a [T], CallError> {
-    if n == 0 {
-        return Ok(&[]);
-    }
-    if pointer.is_null() {
-        return Err(CallError::InvalidArgument(format!(
-            "{what} is a null pointer for {n} values"
-        )));
-    }
-    // SAFETY: non-null and, by the caller's guarantee, n elements long.
-    Ok(unsafe { std::slice::from_raw_parts(pointer, n) })
-}
-
-/// A mutable slice from a C array; null is allowed only for an empty array.
-///
-/// # Safety
-/// A non-null `pointer` points to `n` valid, writable elements.
-pub(crate) unsafe fn output_slice<'a, T>(
-    pointer: *mut T,
-    n: usize,
-    what: &str,
-) -> Result<&'a mut [T], CallError> {
-    if n == 0 {
-        return Ok(&mut []);
-    }
-    if pointer.is_null() {
-        return Err(CallError::InvalidArgument(format!(
-            "{what} is a null pointer for {n} values"
-        )));
-    }
-    // SAFETY: non-null and, by the caller's guarantee, n elements long.
-    Ok(unsafe { std::slice::from_raw_parts_mut(pointer, n) })
-}
-
-pub(crate) fn text(pointer: fmi2String) -> Option<String> {
-    if pointer.is_null() {
-        return None;
-    }
-    // SAFETY: a non-null fmi2String is a NUL-terminated string by the standard.
-    Some(
-        unsafe { CStr::from_ptr(pointer) }
-            .to_string_lossy()
-            .into_owned(),
-    )
-}
-
-/// The folder a `file:` URI names (FMPy passes `file:///...`).
-pub(crate) fn resource_folder(uri: &str) -> Result<PathBuf, String> {
-    if let Some(authority) = uri.strip_prefix("file://")
-        && !authority.starts_with('/')
-        && !authority.starts_with("localhost/")
-    {
-        return Err(format!(
-            "resourceLocation \"{uri}\" names a remote host; only local file: URIs are supported"
-        ));
-    }
-    let rest = uri
-        .strip_prefix("file://localhost/")
-        .map(|r| format!("/{r}"))
-        .or_else(|| uri.strip_prefix("file:///").map(|r| format!("/{r}")))
-        .or_else(|| uri.strip_prefix("file:/").map(|r| format!("/{r}")))
-        .ok_or_else(|| format!("resourceLocation \"{uri}\" is not a file: URI"))?;
-    let bytes = rest.as_bytes();
-    let mut decoded = Vec::with_capacity(bytes.len());
-    let mut i = 0;
-    while i < bytes.len() {
-        if bytes[i] == b'%' && i + 2 < bytes.len() {
-            let hex = std::str::from_utf8(&bytes[i + 1..i + 3]).ok();
-            if let Some(byte) = hex.and_then(|h| u8::from_str_radix(h, 16).ok()) {
-                decoded.push(byte);
-                i += 3;
-                continue;
-            }
-        }
-        decoded.push(bytes[i]);
-        i += 1;
-    }
-    let path = String::from_utf8(decoded)
-        .map_err(|_| format!("resourceLocation \"{uri}\" is not UTF-8 after decoding"))?;
-    Ok(PathBuf::from(path))
-}
+use crate::shared::c_args::{input_slice, output_slice, resource_folder, text};
+use crate::shared::calls;
+use crate::shared::instance::{CallError, Instance, Interface};
+use crate::shared::logger::Logger;
+use crate::shared::phase::Phase;
+use crate::shared::registry::{self, panic_text, register, with_slot};
+use crate::shared::status::Status;
 
 /// fmi2GetTypesPlatform.
 #[unsafe(no_mangle)]
@@ -231,29 +47,16 @@ pub unsafe extern "C" fn fmi2SetDebugLogging(
     nCategories: usize,
     categories: *const fmi2String,
 ) -> fmi2Status {
-    with_slot(c, "fmi2SetDebugLogging", |slot| {
-        // SAFETY: by the caller's guarantee.
-        let categories = unsafe { input_slice(categories, nCategories, "categories") }?;
-        let mut names = Vec::with_capacity(categories.len());
-        for &category in categories {
-            let name = text(category).ok_or_else(|| {
-                CallError::InvalidArgument("a log category is a null pointer".into())
-            })?;
-            if !LOG_CATEGORIES.iter().any(|(known, _)| *known == name) {
-                return Err(CallError::InvalidArgument(format!(
-                    "unknown log category \"{name}\" (declared: {})",
-                    LOG_CATEGORIES.map(|(n, _)| n).join(", ")
-                )));
-            }
-            names.push(name);
-        }
-        // Errors are always reported; the switch concerns the call trace
-        // (category logCalls), named or implied by an empty list.
-        if names.is_empty() || names.iter().any(|n| n == "logCalls") {
-            slot.logger.debug = loggingOn != 0;
-        }
-        Ok(Status::Ok)
-    })
+    // SAFETY: by the caller's guarantee.
+    unsafe {
+        calls::set_debug_logging(
+            c,
+            "fmi2SetDebugLogging",
+            loggingOn != 0,
+            nCategories,
+            categories,
+        )
+    }
 }
 
 fn instantiate(
@@ -292,19 +95,6 @@ fn instantiate(
     };
     logger.trace(&format!("fmi2Instantiate: resources {}", folder.display()));
     register(instance, logger)
-}
-
-/// Boxes an instance with its logger and makes its address live.
-pub(crate) fn register(instance: Instance, logger: Logger) -> fmi2Component {
-    let slot = Box::new(Slot {
-        instance,
-        logger,
-        states: BTreeSet::new(),
-    });
-    let pointer = Box::into_raw(slot);
-    lock(&LIVE).insert(pointer as usize);
-    lock(&FREED).retain(|(a, _)| *a != pointer as usize);
-    pointer.cast()
 }
 
 /// fmi2Instantiate: loads the robot and scenario from the resource folder.
@@ -348,26 +138,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
 /// fmi2FreeInstance. A second call with the same pointer is detected and ignored.
 #[unsafe(no_mangle)]
 pub extern "C" fn fmi2FreeInstance(c: fmi2Component) {
-    if c.is_null() || !lock(&LIVE).remove(&(c as usize)) {
-        return;
-    }
-    // SAFETY: the address was live, so it is a Box<Slot> from fmi2Instantiate;
-    // it was removed from the live set, so it is freed exactly once.
-    let slot = unsafe { Box::from_raw(c.cast::<Slot>()) };
-    let Slot {
-        instance: _,
-        logger,
-        states,
-    } = *slot;
-    for state in states {
-        // SAFETY: every live state address is a Box<Snapshot> of this instance.
-        drop(unsafe { Box::from_raw(state as *mut Snapshot) });
-    }
-    let mut freed = lock(&FREED);
-    if freed.len() == FREED_REMEMBERED {
-        freed.pop_front();
-    }
-    freed.push_back((c as usize, logger));
+    registry::free(c);
 }
 
 /// fmi2SetupExperiment.
@@ -393,37 +164,29 @@ pub extern "C" fn fmi2SetupExperiment(
 /// fmi2EnterInitializationMode.
 #[unsafe(no_mangle)]
 pub extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
-    with_slot(c, "fmi2EnterInitializationMode", |slot| {
-        slot.instance.enter_initialization()?;
-        Ok(Status::Ok)
+    calls::change(c, "fmi2EnterInitializationMode", |i| {
+        i.enter_initialization().map(drop)
     })
 }
 
 /// fmi2ExitInitializationMode: builds the model with the parameters set.
 #[unsafe(no_mangle)]
 pub extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
-    with_slot(c, "fmi2ExitInitializationMode", |slot| {
-        slot.instance.exit_initialization()?;
-        Ok(Status::Ok)
+    calls::change(c, "fmi2ExitInitializationMode", |i| {
+        i.exit_initialization().map(drop)
     })
 }
 
 /// fmi2Terminate.
 #[unsafe(no_mangle)]
 pub extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
-    with_slot(c, "fmi2Terminate", |slot| {
-        slot.instance.terminate()?;
-        Ok(Status::Ok)
-    })
+    calls::change(c, "fmi2Terminate", |i| i.terminate().map(drop))
 }
 
 /// fmi2Reset.
 #[unsafe(no_mangle)]
 pub extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
-    with_slot(c, "fmi2Reset", |slot| {
-        slot.instance.reset()?;
-        Ok(Status::Ok)
-    })
+    calls::change(c, "fmi2Reset", |i| i.reset().map(drop))
 }
 
 /// fmi2GetReal.
@@ -592,51 +355,6 @@ pub unsafe extern "C" fn fmi2SetReal(
     })
 }
 
-fn live_state(slot: &Slot, state: fmi2FMUstate) -> Result<&Snapshot, CallError> {
-    if state.is_null() {
-        return Err(CallError::InvalidArgument(
-            "FMUstate is a null pointer".into(),
-        ));
-    }
-    if !slot.states.contains(&(state as usize)) {
-        return Err(CallError::InvalidArgument(
-            "FMUstate is not a live state of this instance (freed already, or from another instance)"
-                .into(),
-        ));
-    }
-    // SAFETY: live state addresses are Box<Snapshot> owned by this slot.
-    Ok(unsafe { &*state.cast::<Snapshot>() })
-}
-
-/// Stores `snapshot` in `*target`: into the state it already names, or a new one.
-///
-/// # Safety
-/// `target` is null or valid for reads and writes.
-unsafe fn store_state(
-    slot: &mut Slot,
-    target: *mut fmi2FMUstate,
-    snapshot: Snapshot,
-) -> Result<Status, CallError> {
-    if target.is_null() {
-        return Err(CallError::InvalidArgument(
-            "the FMUstate argument is a null pointer".into(),
-        ));
-    }
-    // SAFETY: non-null, by the caller's guarantee valid.
-    let existing = unsafe { *target };
-    if existing.is_null() {
-        let pointer = Box::into_raw(Box::new(snapshot));
-        slot.states.insert(pointer as usize);
-        // SAFETY: as above.
-        unsafe { *target = pointer.cast() };
-    } else {
-        live_state(slot, existing)?;
-        // SAFETY: a live state of this slot.
-        unsafe { *existing.cast::<Snapshot>() = snapshot };
-    }
-    Ok(Status::Ok)
-}
-
 /// fmi2GetFMUstate: a copy of everything that determines the future.
 ///
 /// # Safety
@@ -646,21 +364,14 @@ pub unsafe extern "C" fn fmi2GetFMUstate(
     c: fmi2Component,
     FMUstate: *mut fmi2FMUstate,
 ) -> fmi2Status {
-    with_slot(c, "fmi2GetFMUstate", |slot| {
-        let snapshot = slot.instance.snapshot();
-        // SAFETY: by the caller's guarantee.
-        unsafe { store_state(slot, FMUstate, snapshot) }
-    })
+    // SAFETY: by the caller's guarantee.
+    unsafe { calls::get_state(c, "fmi2GetFMUstate", FMUstate) }
 }
 
 /// fmi2SetFMUstate: rolls back (or forward) to a saved state.
 #[unsafe(no_mangle)]
 pub extern "C" fn fmi2SetFMUstate(c: fmi2Component, FMUstate: fmi2FMUstate) -> fmi2Status {
-    with_slot(c, "fmi2SetFMUstate", |slot| {
-        let snapshot = live_state(slot, FMUstate)?.clone();
-        slot.instance.restore(&snapshot)?;
-        Ok(Status::Ok)
-    })
+    calls::set_state(c, "fmi2SetFMUstate", FMUstate)
 }
 
 /// fmi2FreeFMUstate. Freeing a state twice is detected and refused.
@@ -672,25 +383,8 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(
     c: fmi2Component,
     FMUstate: *mut fmi2FMUstate,
 ) -> fmi2Status {
-    with_slot(c, "fmi2FreeFMUstate", |slot| {
-        if FMUstate.is_null() {
-            return Err(CallError::InvalidArgument(
-                "the FMUstate argument is a null pointer".into(),
-            ));
-        }
-        // SAFETY: non-null, by the caller's guarantee valid.
-        let state = unsafe { *FMUstate };
-        if state.is_null() {
-            return Ok(Status::Ok);
-        }
-        live_state(slot, state)?;
-        slot.states.remove(&(state as usize));
-        // SAFETY: was a live state of this slot, now removed: freed once.
-        drop(unsafe { Box::from_raw(state.cast::<Snapshot>()) });
-        // SAFETY: as above.
-        unsafe { *FMUstate = std::ptr::null_mut() };
-        Ok(Status::Ok)
-    })
+    // SAFETY: by the caller's guarantee.
+    unsafe { calls::free_state(c, "fmi2FreeFMUstate", FMUstate) }
 }
 
 /// fmi2SerializedFMUstateSize.
@@ -703,13 +397,8 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     FMUstate: fmi2FMUstate,
     size: *mut usize,
 ) -> fmi2Status {
-    with_slot(c, "fmi2SerializedFMUstateSize", |slot| {
-        let bytes = slot.instance.serialize(live_state(slot, FMUstate)?);
-        // SAFETY: by the caller's guarantee.
-        let size = unsafe { output_slice(size, 1, "size") }?;
-        size[0] = bytes.len();
-        Ok(Status::Ok)
-    })
+    // SAFETY: by the caller's guarantee.
+    unsafe { calls::serialized_size(c, "fmi2SerializedFMUstateSize", FMUstate, size) }
 }
 
 /// fmi2SerializeFMUstate.
@@ -723,21 +412,9 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     serializedState: *mut fmi2Byte,
     size: usize,
 ) -> fmi2Status {
-    with_slot(c, "fmi2SerializeFMUstate", |slot| {
-        let bytes = slot.instance.serialize(live_state(slot, FMUstate)?);
-        if size < bytes.len() {
-            return Err(CallError::InvalidArgument(format!(
-                "buffer of {size} bytes is too small for the state ({} bytes; ask fmi2SerializedFMUstateSize)",
-                bytes.len()
-            )));
-        }
-        // SAFETY: by the caller's guarantee.
-        let out = unsafe { output_slice(serializedState, bytes.len(), "serializedState") }?;
-        for (slot_byte, byte) in out.iter_mut().zip(&bytes) {
-            *slot_byte = *byte as fmi2Byte;
-        }
-        Ok(Status::Ok)
-    })
+    let calls = ("fmi2SerializeFMUstate", "fmi2SerializedFMUstateSize");
+    // SAFETY: by the caller's guarantee (fmi2Byte has the size of a byte).
+    unsafe { calls::serialize(c, calls, FMUstate, serializedState.cast::<u8>(), size) }
 }
 
 /// fmi2DeSerializeFMUstate.
@@ -752,13 +429,9 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     size: usize,
     FMUstate: *mut fmi2FMUstate,
 ) -> fmi2Status {
-    with_slot(c, "fmi2DeSerializeFMUstate", |slot| {
-        // SAFETY: by the caller's guarantee.
-        let bytes = unsafe { input_slice(serializedState.cast::<u8>(), size, "serializedState") }?;
-        let snapshot = slot.instance.deserialize(bytes)?;
-        // SAFETY: by the caller's guarantee.
-        unsafe { store_state(slot, FMUstate, snapshot) }
-    })
+    let bytes = (serializedState.cast::<u8>(), size);
+    // SAFETY: by the caller's guarantee.
+    unsafe { calls::deserialize(c, "fmi2DeSerializeFMUstate", bytes, FMUstate) }
 }
 
 /// fmi2GetDirectionalDerivative: outputs with respect to inputs, exact.
@@ -963,10 +636,7 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
 /// fmi2EnterEventMode (Model Exchange).
 #[unsafe(no_mangle)]
 pub extern "C" fn fmi2EnterEventMode(c: fmi2Component) -> fmi2Status {
-    with_slot(c, "fmi2EnterEventMode", |slot| {
-        slot.instance.enter_event_mode()?;
-        Ok(Status::Ok)
-    })
+    calls::change(c, "fmi2EnterEventMode", |i| i.enter_event_mode().map(drop))
 }
 
 /// fmi2NewDiscreteStates (Model Exchange): nothing discrete changes; the
@@ -1004,9 +674,8 @@ pub unsafe extern "C" fn fmi2NewDiscreteStates(
 /// fmi2EnterContinuousTimeMode (Model Exchange).
 #[unsafe(no_mangle)]
 pub extern "C" fn fmi2EnterContinuousTimeMode(c: fmi2Component) -> fmi2Status {
-    with_slot(c, "fmi2EnterContinuousTimeMode", |slot| {
-        slot.instance.enter_continuous_time_mode()?;
-        Ok(Status::Ok)
+    calls::change(c, "fmi2EnterContinuousTimeMode", |i| {
+        i.enter_continuous_time_mode().map(drop)
     })
 }
 
@@ -1024,7 +693,7 @@ pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
 ) -> fmi2Status {
     // SAFETY: by the caller's guarantee.
     unsafe {
-        completed_integrator_step(
+        calls::completed_integrator_step(
             c,
             "fmi2CompletedIntegratorStep",
             [enterEventMode, terminateSimulation],
@@ -1033,39 +702,10 @@ pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
     }
 }
 
-/// fmi2/fmi3CompletedIntegratorStep: never asks for an event or the end,
-/// `no` being the standard's false.
-///
-/// # Safety
-/// The flags are null or valid for writes.
-pub(crate) unsafe fn completed_integrator_step<B: Copy>(
-    c: fmi2Component,
-    call: &'static str,
-    flags: [*mut B; 2],
-    no: B,
-) -> fmi2Status {
-    with_slot(c, call, |slot| {
-        if flags.iter().any(|f| f.is_null()) {
-            return Err(CallError::InvalidArgument(
-                "enterEventMode or terminateSimulation is a null pointer".into(),
-            ));
-        }
-        slot.instance.completed_integrator_step()?;
-        for flag in flags {
-            // SAFETY: non-null; the caller passes valid pointers.
-            unsafe { *flag = no };
-        }
-        Ok(Status::Ok)
-    })
-}
-
 /// fmi2SetTime (Model Exchange).
 #[unsafe(no_mangle)]
 pub extern "C" fn fmi2SetTime(c: fmi2Component, time: fmi2Real) -> fmi2Status {
-    with_slot(c, "fmi2SetTime", |slot| {
-        slot.instance.set_time(time)?;
-        Ok(Status::Ok)
-    })
+    calls::change(c, "fmi2SetTime", |i| i.set_time(time).map(drop))
 }
 
 /// fmi2SetContinuousStates (Model Exchange).
@@ -1078,31 +718,8 @@ pub unsafe extern "C" fn fmi2SetContinuousStates(
     x: *const fmi2Real,
     nx: usize,
 ) -> fmi2Status {
-    with_slot(c, "fmi2SetContinuousStates", |slot| {
-        // SAFETY: by the caller's guarantee.
-        let x = unsafe { input_slice(x, nx, "x") }?;
-        slot.instance.set_continuous_states(x)?;
-        Ok(Status::Ok)
-    })
-}
-
-/// A Model Exchange getter filling an array of `n` reals.
-///
-/// # Safety
-/// `values` is null or points to `n` writable elements.
-unsafe fn real_array_getter(
-    c: fmi2Component,
-    call: &'static str,
-    values: *mut fmi2Real,
-    n: usize,
-    get: impl FnOnce(&mut Instance, &mut [f64]) -> Result<(), CallError>,
-) -> fmi2Status {
-    with_slot(c, call, |slot| {
-        // SAFETY: by the caller's guarantee.
-        let values = unsafe { output_slice(values, n, "the array") }?;
-        get(&mut slot.instance, values)?;
-        Ok(Status::Ok)
-    })
+    // SAFETY: by the caller's guarantee.
+    unsafe { calls::set_continuous_states(c, "fmi2SetContinuousStates", x, nx) }
 }
 
 /// fmi2GetDerivatives (Model Exchange): the model's own right-hand side.
@@ -1117,7 +734,7 @@ pub unsafe extern "C" fn fmi2GetDerivatives(
 ) -> fmi2Status {
     // SAFETY: by the caller's guarantee.
     unsafe {
-        real_array_getter(c, "fmi2GetDerivatives", derivatives, nx, |i, v| {
+        calls::real_array(c, "fmi2GetDerivatives", (derivatives, nx), |i, v| {
             i.get_derivatives(v)
         })
     }
@@ -1135,9 +752,12 @@ pub unsafe extern "C" fn fmi2GetEventIndicators(
 ) -> fmi2Status {
     // SAFETY: by the caller's guarantee.
     unsafe {
-        real_array_getter(c, "fmi2GetEventIndicators", eventIndicators, ni, |i, v| {
-            i.get_event_indicators(v.len())
-        })
+        calls::real_array(
+            c,
+            "fmi2GetEventIndicators",
+            (eventIndicators, ni),
+            |i, v| i.get_event_indicators(v.len()),
+        )
     }
 }
 
@@ -1153,7 +773,7 @@ pub unsafe extern "C" fn fmi2GetContinuousStates(
 ) -> fmi2Status {
     // SAFETY: by the caller's guarantee.
     unsafe {
-        real_array_getter(c, "fmi2GetContinuousStates", x, nx, |i, v| {
+        calls::real_array(c, "fmi2GetContinuousStates", (x, nx), |i, v| {
             i.get_continuous_states(v)
         })
     }
@@ -1171,11 +791,10 @@ pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(
 ) -> fmi2Status {
     // SAFETY: by the caller's guarantee.
     unsafe {
-        real_array_getter(
+        calls::real_array(
             c,
             "fmi2GetNominalsOfContinuousStates",
-            x_nominal,
-            nx,
+            (x_nominal, nx),
             |i, v| i.get_nominals(v),
         )
     }

@@ -4,7 +4,7 @@
 //! the model's own right-hand side for the importer's solver (Model
 //! Exchange, time events at the reference's breakpoints), FMU state
 //! snapshots and their byte form, and directional derivatives of outputs
-//! and state derivatives. The C ABI in [`crate::exports`] is a thin face
+//! and state derivatives. The C ABI in [`crate::fmi2::exports`] is a thin face
 //! over this type.
 
 use std::path::Path;
