@@ -133,7 +133,7 @@ def test_progress_is_reported_and_a_raising_callback_stops_the_run(root):
         scenario.run(progress=stop)
 
 
-def test_ctrl_c_stops_a_long_run(root):
+def test_ctrl_c_stops_a_long_run(root, ctrl_c):
     import os
     import signal
     import threading

@@ -74,7 +74,7 @@ def test_export_fmu_packages_the_scenario(root, tmp_path):
         scenario.export_fmu(tmp_path / "x.fmu", library=tmp_path / "missing.so")
 
 
-def test_ctrl_c_stops_a_long_tolerance_analysis(root):
+def test_ctrl_c_stops_a_long_tolerance_analysis(root, ctrl_c):
     import signal
     import threading
     import time
