@@ -101,6 +101,10 @@ impl MachineCode for Native {
         self.compile_time
     }
 
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+
     #[inline]
     fn rhs(&self, x: &[f64], inputs: &InputValues<f64>, dx: &mut [f64]) -> Result<(), Bail> {
         if x.len() < self.n_states || dx.len() < self.n_states {
@@ -227,6 +231,17 @@ fn trace(
 /// from [`Model::rhs`]; or why it is not compiled.
 pub fn machine_code(model: &Model, function: Function) -> Result<&dyn MachineCode, &NotCompiled> {
     model.compile_with(function, compile_boxed)
+}
+
+/// [`machine_code`] as the concrete [`Native`] (whose calls an engine's
+/// loop inlines); `None` where the model's function is not compiled.
+pub fn native(model: &Model, function: Function) -> Option<&Native> {
+    machine_code(model, function).ok()?.as_any().downcast_ref()
+}
+
+/// The model's `function` as [`Native`] if a call compiled it already.
+pub fn compiled_native(model: &Model, function: Function) -> Option<&Native> {
+    model.compiled(function)?.as_any().downcast_ref()
 }
 
 fn compile_boxed(model: &Model, function: Function) -> Compiled {

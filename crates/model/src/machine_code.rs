@@ -60,6 +60,10 @@ pub trait MachineCode: Send + Sync + fmt::Debug {
 
     /// How long recording, compiling and checking it took.
     fn compile_time(&self) -> Duration;
+
+    /// The code generator's own type behind this trait, so that its crate
+    /// can call it without the trait's indirection (an engine's hot loop).
+    fn as_any(&self) -> &dyn std::any::Any;
 }
 
 /// Why a model's function is not compiled.

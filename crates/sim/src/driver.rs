@@ -6,7 +6,7 @@
 //! that end on the friction law's kinks ([`KinkPredictor`]), the step
 //! budget and the mapping of integrator failures to [`SimError`].
 
-use fistage_codegen::{Function, MachineCode, machine_code};
+use fistage_codegen::{Function, MachineCode, Native, compiled_native, native};
 use fistage_model::{InputValues, Model, Workspace};
 use std::ops::ControlFlow;
 
@@ -97,7 +97,7 @@ enum TierState<'a> {
     /// Generic evaluation until the run has made enough evaluations.
     Generic,
     /// The machine code.
-    Compiled(&'a dyn MachineCode),
+    Compiled(&'a Native),
     /// The model does not compile (the generic code stays).
     Unavailable,
 }
@@ -105,7 +105,7 @@ enum TierState<'a> {
 impl<'a> Tier<'a> {
     /// The compiled function if the model has it already.
     fn new(model: &'a Model, function: Function) -> Self {
-        let state = match model.compiled(function) {
+        let state = match compiled_native(model, function) {
             Some(native) => TierState::Compiled(native),
             None => TierState::Generic,
         };
@@ -129,7 +129,7 @@ impl<'a> Tier<'a> {
     /// run's countdown of generic evaluations has run out; `None`: evaluate
     /// generically (and count).
     #[inline]
-    fn next(&mut self, model: &'a Model, countdown: &mut u32) -> Option<&'a dyn MachineCode> {
+    fn next(&mut self, model: &'a Model, countdown: &mut u32) -> Option<&'a Native> {
         match self.state {
             TierState::Compiled(native) => Some(native),
             TierState::Unavailable => None,
@@ -138,9 +138,9 @@ impl<'a> Tier<'a> {
                 None
             }
             TierState::Generic => {
-                self.state = match machine_code(model, self.function) {
-                    Ok(native) => TierState::Compiled(native),
-                    Err(_) => TierState::Unavailable,
+                self.state = match native(model, self.function) {
+                    Some(native) => TierState::Compiled(native),
+                    None => TierState::Unavailable,
                 };
                 self.next(model, countdown)
             }
@@ -372,7 +372,7 @@ mod tests {
         let loaded = fistage_model::load(&root.join("scenarios/coupling/friction20_traverse.toml"))
             .expect("loads");
         let model = &loaded.model;
-        machine_code(model, Function::Rhs).expect("compiles");
+        native(model, Function::Rhs).expect("compiles");
         let excitation = ScenarioExcitation::from_scenario(&loaded.scenario);
         let mut ws = model.workspace();
         let mut system = ModelSystem::new(model, &excitation, &mut ws);
