@@ -504,7 +504,9 @@ fn unit_axis(axis: Vector3<f64>) -> Result<Vector3<f64>, String> {
     if !norm.is_finite() || norm < 1e-12 {
         return Err(format!(
             "axis must be a non-zero finite vector, got [{} {} {}]",
-            axis.x, axis.y, axis.z
+            crate::rule::show(axis.x),
+            crate::rule::show(axis.y),
+            crate::rule::show(axis.z)
         ));
     }
     Ok(axis / norm)
@@ -792,5 +794,19 @@ impl ExtensionReader<'_> {
             point: self.origin(&children, &element)?.translation.vector,
             axis: self.axis(&children, &element)?,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A refused axis shows its numbers as the user wrote them, not 300
+    /// digits of a tiny one.
+    #[test]
+    fn a_refused_axis_is_shown_readably() {
+        let refused = unit_axis(Vector3::new(1e-300, 0.0, 0.0)).expect_err("too short");
+        assert!(refused.ends_with("got [1e-300 0 0]"), "{refused}");
+        assert!(unit_axis(Vector3::new(0.0, 2.0, 0.0)).is_ok());
     }
 }
