@@ -57,7 +57,7 @@ enum Command {
     Lyapunov(lyapunov::LyapunovArgs),
     /// Identify LuGre parameters from measured stage data.
     Identify(identify::IdentifyArgs),
-    /// Package a scenario as an FMI 2.0 Co-Simulation FMU.
+    /// Package a scenario as an FMI 2.0 or 3.0 FMU (Model Exchange and Co-Simulation).
     Fmu(fmu::FmuArgs),
     /// Print the completion script of a shell (bash, zsh, fish, elvish, powershell).
     Completions(shell::CompletionsArgs),
