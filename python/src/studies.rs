@@ -12,7 +12,8 @@ use std::path::{Path, PathBuf};
 use fistage_analysis::assess::worker_threads;
 use fistage_analysis::robust::{RobustSpec, RobustStudy, Summary};
 use fistage_analysis::study::{
-    Provenance, Study, StudyError, StudyOptions, StudyRun, merge, parse_shard, write_table,
+    Provenance, Study, StudyError, StudyOptions, StudyRun, merge, parse_shard, table_text,
+    write_table,
 };
 use fistage_analysis::sweep::{SweepSpec, SweepStudy};
 use fistage_model::{Loaded, RobotSpec};
@@ -154,14 +155,6 @@ fn run_study<S: Study>(
     extra(&rows, folder.path()).map_err(|e| Error::new_err(e.to_string()))?;
     folder.commit().map_err(|e| Error::new_err(e.to_string()))?;
     Ok(rows)
-}
-
-/// The table's text as the program writes it.
-fn table_text<S: Study>(study: &S, rows: &[S::Row]) -> String {
-    let lines: Vec<String> = std::iter::once(study.header())
-        .chain(rows.iter().map(|r| study.row(r)))
-        .collect();
-    lines.join("\n") + "\n"
 }
 
 /// The scenario as a study input: its text, and the overrides made in

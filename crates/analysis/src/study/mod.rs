@@ -313,8 +313,9 @@ impl<'s, S: Study> StudyRun<'s, S> {
     }
 }
 
-/// The table's text: header and rows, each line ended.
-fn table_text<S: Study>(study: &S, rows: &[S::Row]) -> String {
+/// The table's text as [`write_table`] writes it: header and rows, each
+/// line ended.
+pub fn table_text<S: Study>(study: &S, rows: &[S::Row]) -> String {
     let mut text = study.header() + "\n";
     for row in rows {
         text.push_str(&study.row(row));
