@@ -3,8 +3,6 @@
 
 use std::path::Path;
 
-use image::ImageEncoder;
-use image::codecs::png::PngEncoder;
 use plotters::backend::RGBPixel;
 use plotters::coord::Shift;
 use plotters::prelude::{BitMapBackend, DrawingArea, DrawingBackend, IntoDrawingArea, SVGBackend};
@@ -101,10 +99,18 @@ fn render_png(size: (u32, u32), painter: &impl Painter) -> DrawResult<Vec<u8>> {
         let root = backend.into_drawing_area();
         paint_root(&root, painter, Format::Png)?;
     }
+    encode_png(&pixels, size).map_err(|e| DrawError(format!("PNG encoding failed: {e}")))
+}
+
+/// Encodes 8-bit RGB pixels, row after row, as a PNG file.
+fn encode_png(pixels: &[u8], (width, height): (u32, u32)) -> Result<Vec<u8>, png::EncodingError> {
     let mut encoded = Vec::new();
-    PngEncoder::new(&mut encoded)
-        .write_image(&pixels, width, height, image::ColorType::Rgb8)
-        .map_err(|e| DrawError(format!("PNG encoding failed: {e}")))?;
+    let mut encoder = png::Encoder::new(&mut encoded, width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header()?;
+    writer.write_image_data(pixels)?;
+    writer.finish()?;
     Ok(encoded)
 }
 
