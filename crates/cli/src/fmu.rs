@@ -4,7 +4,9 @@
 
 use std::path::PathBuf;
 
+#[cfg(feature = "fmu")]
 use anyhow::{Context, bail};
+#[cfg(feature = "fmu")]
 use fistage_fmi::package::{LIBRARY_FILE, default_library_locations};
 
 /// Arguments of `fistage fmu`.
@@ -24,6 +26,7 @@ pub struct FmuArgs {
     pub fmi_version: String,
 }
 
+#[cfg(feature = "fmu")]
 fn find_library(args: &FmuArgs) -> anyhow::Result<PathBuf> {
     if let Some(library) = &args.shared_object {
         if !library.is_file() {
@@ -49,7 +52,14 @@ fn find_library(args: &FmuArgs) -> anyhow::Result<PathBuf> {
         })
 }
 
+/// A lean build (without the `fmu` feature) has no FMI library to pack.
+#[cfg(not(feature = "fmu"))]
+pub fn run(_args: &FmuArgs) -> anyhow::Result<()> {
+    crate::absent::refuse("fmu", "fmu")
+}
+
 /// Runs the command.
+#[cfg(feature = "fmu")]
 pub fn run(args: &FmuArgs) -> anyhow::Result<()> {
     let library = find_library(args)?;
     let version = match args.fmi_version.as_str() {

@@ -4,6 +4,8 @@
 // written for a terminal (`out/<scenario>`, `[sweep]`), not for rustdoc.
 #![allow(rustdoc::broken_intra_doc_links, rustdoc::invalid_html_tags)]
 
+#[cfg(any(not(feature = "bench"), not(feature = "fmu")))]
+mod absent;
 mod check;
 mod compare;
 mod figures;
@@ -42,7 +44,11 @@ enum Command {
     /// Load and validate a scenario and its robot; print the assembled model.
     Check(check::CheckArgs),
     /// Measure engine speed and accuracy (Markdown tables for BENCHMARKS.md).
+    #[cfg(feature = "bench")]
     Bench(fistage_bench::BenchArgs),
+    /// Measure engine speed and accuracy (not in this build: the `bench` feature).
+    #[cfg(not(feature = "bench"))]
+    Bench(absent::AbsentArgs),
     /// Equilibria, eigenvalues and mode shapes (table, modes.json, top-view pictures).
     Modes(modes::ModesArgs),
     /// Stability over a grid of one or two parameters (points.csv, points.json, map).
@@ -107,7 +113,10 @@ fn run_command() -> anyhow::Result<()> {
     match cli.command {
         Command::Run(args) => run::run(&args),
         Command::Identify(args) => identify::run(&args),
+        #[cfg(feature = "bench")]
         Command::Bench(args) => fistage_bench::run(&args),
+        #[cfg(not(feature = "bench"))]
+        Command::Bench(_) => absent::refuse("bench", "bench"),
         Command::Check(args) => check::run(&args),
         Command::Modes(args) => modes::run(&args),
         Command::Sweep(args) => sweep::run(&args),

@@ -20,6 +20,9 @@ use cranelift_module::{FuncId, Linkage, Module, default_libcall_names};
 use super::calls::{Call1, Call2};
 use super::tape::{Guard, Holds, Node, Output, Slot, Tape};
 
+/// This build generates code.
+pub(crate) const AVAILABLE: bool = true;
+
 /// A compiled function: see the module documentation.
 pub(crate) type KernelFn = unsafe extern "C" fn(*mut f64, *mut f64, *const f64, f64) -> u32;
 

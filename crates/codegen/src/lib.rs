@@ -49,7 +49,15 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+// Without Cranelift nothing is recorded or emitted: the recorder's and the
+// library calls' helpers are unused in that build.
+#![cfg_attr(not(feature = "cranelift"), allow(dead_code))]
+
 mod calls;
+#[cfg(feature = "cranelift")]
+mod emit;
+#[cfg(not(feature = "cranelift"))]
+#[path = "emit_none.rs"]
 mod emit;
 mod tape;
 mod traced;
@@ -252,6 +260,9 @@ fn compile_boxed(model: &Model, function: Function) -> Compiled {
 /// states of its own.
 pub fn compile(model: &Model, function: Function) -> Result<Native, NotCompiled> {
     let started = std::time::Instant::now();
+    if !emit::AVAILABLE {
+        return Err(NotCompiled::NoCodeGenerator);
+    }
     if function == Function::ImplicitStage && model.bristle_states().is_empty() {
         return Err(NotCompiled::NoBristles);
     }

@@ -95,6 +95,10 @@ pub enum NotCompiled {
     /// Switched off for this model ([`crate::Model::interpreted`]).
     #[error("switched off")]
     Disabled,
+    /// The program was built without a code generator (a lean build: the
+    /// generic evaluation gives the same numbers, more slowly).
+    #[error("this build has no code generator: the program's `machine-code` feature is off")]
+    NoCodeGenerator,
 }
 
 /// A compiled function as a model keeps it (shared by the model's clones).

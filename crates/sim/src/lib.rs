@@ -18,8 +18,10 @@
 //!   bristle and bushing stiffness hold it near its stability limit; it pays
 //!   only at rtol 1e-10 on the small ones) and ROS34PW2 (`rosenbrock`,
 //!   linearly implicit with the model's exact Jacobian, for very stiff
-//!   isolators); [`RapierEngine`], rapier3d-f64 under the
-//!   model's own force elements, for end stops and loose payloads. The
+//!   isolators); `RapierEngine`, rapier3d-f64 under the
+//!   model's own force elements, for end stops and loose payloads (the
+//!   `rapier` feature, on by default; a build without it refuses
+//!   `engine = "rapier"` by name). The
 //!   adaptive engines and the co-simulation [`Stepper`] share one driver:
 //!   segments between the inputs' discontinuities, steps that end on each
 //!   predicted sign change of a contact's slip velocity (where the bristle
@@ -48,12 +50,15 @@
 
 #![warn(missing_docs)]
 
+#[cfg(not(feature = "rapier"))]
+mod absent_engine;
 pub mod choice;
 pub mod cosim;
 mod driver;
 pub mod engine;
 mod kinks;
 pub mod metrics;
+#[cfg(feature = "rapier")]
 pub mod rapier_engine;
 pub mod run;
 pub mod select;
@@ -69,6 +74,7 @@ pub use fistage_model::excitation::{
 };
 pub use fistage_ode::{Checkpoint, MethodKind, StepCounts};
 pub use metrics::{SignalSummary, WindowStats, summarize, window_stats};
+#[cfg(feature = "rapier")]
 pub use rapier_engine::RapierEngine;
 pub use run::{RunError, RunOutput, run_scenario, validate};
 pub use select::{engine_for, engine_in, engine_of_kind};

@@ -81,11 +81,9 @@ pub fn validate(loaded: &Loaded) -> Result<Vec<f64>, RunError> {
     };
     match (scenario.solver.engine, colliders) {
         (EngineKind::Rapier, _) => {
-            crate::rapier_engine::check_colliders(model, &scenario.rapier).map_err(|source| {
-                RunError::Simulation {
-                    file: scenario.file.display().to_string(),
-                    source,
-                }
+            check_rapier(model, scenario).map_err(|source| RunError::Simulation {
+                file: scenario.file.display().to_string(),
+                source,
             })?;
         }
         (engine, Some(key)) => {
@@ -101,6 +99,18 @@ pub fn validate(loaded: &Loaded) -> Result<Vec<f64>, RunError> {
         (_, None) => {}
     }
     Ok(initial_state(model, scenario)?)
+}
+
+/// The rapier engine's colliders against the model.
+#[cfg(feature = "rapier")]
+fn check_rapier(model: &Model, scenario: &Scenario) -> Result<(), SimError> {
+    crate::rapier_engine::check_colliders(model, &scenario.rapier)
+}
+
+/// A build without rapier refuses its engine before anything runs.
+#[cfg(not(feature = "rapier"))]
+fn check_rapier(_model: &Model, _scenario: &Scenario) -> Result<(), SimError> {
+    Err(crate::absent_engine::AbsentEngine::rapier().error())
 }
 
 /// Runs a loaded scenario with the engine it names.

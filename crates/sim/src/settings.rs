@@ -82,6 +82,16 @@ pub enum SimError {
         /// The budget.
         max_steps: u64,
     },
+    /// The engine a scenario names is not in this build.
+    #[error(
+        "the {engine} engine is not in this build of fistage (its `{feature}` feature is off: build with the default features)"
+    )]
+    EngineNotBuilt {
+        /// The engine's scenario name.
+        engine: &'static str,
+        /// The cargo feature that brings it.
+        feature: &'static str,
+    },
     /// A fixed-step engine would need more steps than the budget allows.
     #[error(
         "the fixed step dt = {dt:.3e} s needs {steps:.3e} steps, more than solver.max_steps = {max_steps} (raise rapier.dt or solver.max_steps, or shorten the run)"
