@@ -188,20 +188,39 @@ fn mat_records_read_back() {
 fn intervals_hold_on_disturbed_records() {
     let truth = LugreParams::paper_table1();
     let exact = Theta::new(&truth, 1.5);
-    let seeds = 1..=10u64;
+    // The ten fits are independent: two at a time, so that this test is not
+    // the suite's longest by itself.
+    let fits: Vec<_> = std::thread::scope(|scope| {
+        let workers: Vec<_> = [1..=5u64, 6..=10u64]
+            .into_iter()
+            .map(|seeds| {
+                scope.spawn(move || {
+                    seeds
+                        .map(|seed| {
+                            let synth = RecordSynth {
+                                errors: fistage_ident::record::LabErrors {
+                                    disturbance_rms: 0.01,
+                                    seed,
+                                    ..fistage_ident::record::LabErrors::encoder()
+                                },
+                                ..RecordSynth::new(truth, 1.5)
+                            };
+                            let (record, _) = synth.generate().unwrap();
+                            fit_record(&record, &RecordOptions::default(), &mut |_| true).unwrap()
+                        })
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        workers
+            .into_iter()
+            .flat_map(|worker| worker.join().expect("a fit thread"))
+            .collect()
+    });
+    assert_eq!(fits.len(), 10);
     let mut covered = [0usize; 7];
     let mut covered_iid = 0;
-    for seed in seeds.clone() {
-        let synth = RecordSynth {
-            errors: fistage_ident::record::LabErrors {
-                disturbance_rms: 0.01,
-                seed,
-                ..fistage_ident::record::LabErrors::encoder()
-            },
-            ..RecordSynth::new(truth, 1.5)
-        };
-        let (record, _) = synth.generate().unwrap();
-        let fit = fit_record(&record, &RecordOptions::default(), &mut |_| true).unwrap();
+    for fit in &fits {
         for (j, p) in RecordParam::ALL.iter().enumerate() {
             let t = exact.get(*p);
             let e = fit.estimate(*p);
