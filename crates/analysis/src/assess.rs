@@ -12,33 +12,11 @@ use fistage_model::{
 };
 use fistage_sim::{AutoEngine, Engine, Excitation, ScenarioExcitation, SimSettings, initial_state};
 use rayon::prelude::*;
-use serde::Deserialize;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use crate::modes::{Verdict, modal_analysis};
 
-/// Which analyses a study runs at each point.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Analyses {
-    /// Eigenvalues at the slipping equilibrium.
-    Linear,
-    /// Simulation from rest.
-    Simulation,
-    /// Both, and bistability.
-    Both,
-}
-
-impl Analyses {
-    /// Whether the eigenvalues are computed.
-    pub fn linear(self) -> bool {
-        self != Self::Simulation
-    }
-    /// Whether the stage is simulated.
-    pub fn simulation(self) -> bool {
-        self != Self::Linear
-    }
-}
+pub use fistage_model::studies::Analyses;
 
 /// What is computed at each point, and how.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -32,28 +32,16 @@
 //! sit above the mean). `spread.friction` spreads f_c, f_s and sigma0 together
 //! (keeping f_s >= f_c).
 
-use fistage_model::rule::readable_numbers;
+use fistage_model::studies::AxisTable;
 use fistage_model::{LoadError, Loaded, Parameter, RobotSpec, Scenario};
-use serde::Deserialize;
 
 use crate::assess::{Assessment, in_parallel};
 use crate::study::{Provenance, Study, StudyError};
 
-/// Grid spacing along an axis.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Spacing {
-    /// Evenly spaced values.
-    #[serde(alias = "linear")]
-    Lin,
-    /// Evenly spaced logarithms.
-    #[serde(alias = "logarithmic")]
-    Log,
-}
+pub use fistage_model::studies::Spacing;
 
 /// One sweep axis.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Axis {
     /// Parameter path.
     pub parameter: String,
@@ -64,19 +52,57 @@ pub struct Axis {
     /// Number of values (>= 1).
     pub points: usize,
     /// Spacing.
-    #[serde(default = "linear")]
     pub spacing: Spacing,
     /// Explicit values instead of a spacing (`values = [...]` in the file;
     /// `from`, `to` and `points` then follow from it).
-    #[serde(default)]
     pub list: Option<Vec<f64>>,
 }
 
-fn linear() -> Spacing {
-    Spacing::Lin
-}
-
 impl Axis {
+    /// The axis an `[[sweep.axis]]` entry (number `k`) gives: `from`, `to`
+    /// and `points`, or its `values` (a non-empty list of distinct finite
+    /// numbers, with none of the others); else (key, why).
+    fn from_table(k: usize, table: &AxisTable) -> Result<Self, (String, String)> {
+        let key = format!("sweep.axis[{k}]");
+        let Some(values) = &table.values else {
+            let missing = |name: &str| (key.clone(), format!("needs {name} (or values)"));
+            return Ok(Self {
+                parameter: table.parameter.clone(),
+                from: table.from.ok_or_else(|| missing("from"))?,
+                to: table.to.ok_or_else(|| missing("to"))?,
+                points: table.points.ok_or_else(|| missing("points"))?,
+                spacing: table.spacing.unwrap_or(Spacing::Lin),
+                list: None,
+            });
+        };
+        let key = format!("{key}.values");
+        let given = [
+            ("from", table.from.is_some()),
+            ("to", table.to.is_some()),
+            ("points", table.points.is_some()),
+            ("spacing", table.spacing.is_some()),
+        ];
+        if let Some((other, _)) = given.iter().find(|(_, present)| *present) {
+            return Err((key, format!("gives the values; leave out {other}")));
+        }
+        if values.is_empty() || values.iter().any(|v| !v.is_finite()) {
+            return Err((key, "must be a non-empty list of finite numbers".into()));
+        }
+        let mut sorted = values.clone();
+        sorted.sort_by(f64::total_cmp);
+        if sorted.windows(2).any(|w| w[0] == w[1]) {
+            return Err((key, "holds a value twice".into()));
+        }
+        Ok(Self {
+            parameter: table.parameter.clone(),
+            from: values[0],
+            to: values[values.len() - 1],
+            points: values.len(),
+            spacing: Spacing::Lin,
+            list: Some(values.clone()),
+        })
+    }
+
     /// The axis values, first to last.
     pub fn values(&self) -> Vec<f64> {
         if let Some(list) = &self.list {
@@ -101,28 +127,16 @@ impl Axis {
 pub use crate::assess::Analyses;
 
 /// A checked `[sweep]` table.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct SweepSpec {
     /// One or two axes; the first varies fastest in the grid order.
-    #[serde(rename = "axis")]
     pub axes: Vec<Axis>,
     /// Analyses to run.
-    #[serde(default = "both")]
     pub analysis: Analyses,
     /// Simulated time per point, s (default: the scenario's duration).
     pub duration: Option<f64>,
     /// Steady peak-to-peak of the sensor above which a run oscillates, m.
-    #[serde(default = "default_threshold")]
     pub oscillation_threshold: f64,
-}
-
-fn both() -> Analyses {
-    Analyses::Both
-}
-
-fn default_threshold() -> f64 {
-    1e-9
 }
 
 /// Parameter paths every model accepts, besides `overrides.<element>.<key>`.
@@ -135,14 +149,20 @@ pub const MAX_GRID_POINTS: usize = 1_000_000;
 impl SweepSpec {
     /// Reads the scenario's `[sweep]` table.
     pub fn from_scenario(scenario: &Scenario) -> Result<Self, LoadError> {
-        let raw = scenario
+        let table = scenario
             .sweep
-            .clone()
+            .as_ref()
             .ok_or_else(|| scenario.error("sweep", "the scenario has no [sweep] table"))?;
-        let raw = with_listed_axes(raw).map_err(|(key, m)| scenario.error(key, m))?;
-        let spec: SweepSpec = raw.try_into().map_err(|e: toml::de::Error| {
-            scenario.error("sweep", readable_numbers(e.to_string().trim()))
-        })?;
+        let axes = (table.axes.iter().enumerate())
+            .map(|(k, axis)| Axis::from_table(k, axis))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|(key, m)| scenario.error(key, m))?;
+        let spec = SweepSpec {
+            axes,
+            analysis: table.analysis,
+            duration: table.duration,
+            oscillation_threshold: table.oscillation_threshold,
+        };
         if spec.axes.is_empty() || spec.axes.len() > 2 {
             return Err(scenario.error(
                 "sweep.axis",
@@ -235,57 +255,6 @@ impl SweepSpec {
             })
             .collect()
     }
-}
-
-/// Rewrites each `[[sweep.axis]]` given as `values = [...]` into the
-/// `from`, `to`, `points` and `list` it stands for; an axis with both is an
-/// error, as is a list that is empty, not numbers, or not finite.
-fn with_listed_axes(mut raw: toml::Value) -> Result<toml::Value, (String, String)> {
-    let Some(axes) = raw.get_mut("axis").and_then(|a| a.as_array_mut()) else {
-        return Ok(raw);
-    };
-    for (k, axis) in axes.iter_mut().enumerate() {
-        let Some(table) = axis.as_table_mut() else {
-            continue;
-        };
-        let Some(values) = table.remove("values") else {
-            continue;
-        };
-        let key = format!("sweep.axis[{k}].values");
-        if let Some(other) = ["from", "to", "points", "spacing"]
-            .iter()
-            .find(|o| table.contains_key(**o))
-        {
-            return Err((key, format!("gives the values; leave out {other}")));
-        }
-        let list: Option<Vec<f64>> = values.as_array().and_then(|items| {
-            items
-                .iter()
-                .map(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
-                .collect()
-        });
-        let list = list
-            .filter(|l| !l.is_empty() && l.iter().all(|v| v.is_finite()))
-            .ok_or_else(|| {
-                (
-                    key.clone(),
-                    "must be a non-empty list of finite numbers".into(),
-                )
-            })?;
-        let mut sorted = list.clone();
-        sorted.sort_by(f64::total_cmp);
-        if sorted.windows(2).any(|w| w[0] == w[1]) {
-            return Err((key, "holds a value twice".into()));
-        }
-        table.insert("from".into(), list[0].into());
-        table.insert("to".into(), list[list.len() - 1].into());
-        table.insert("points".into(), (list.len() as i64).into());
-        table.insert(
-            "list".into(),
-            toml::Value::Array(list.into_iter().map(toml::Value::from).collect()),
-        );
-    }
-    Ok(raw)
 }
 
 /// What one grid point gave.

@@ -29,10 +29,7 @@ fn study(robot: &str, robust: &str) -> (Loaded, RobotSpec, Scenario) {
 
 /// The same with other servo gains (`gains`: the `[controller]` lines).
 fn study_with_servo(robot: &str, gains: &str, robust: &str) -> (Loaded, RobotSpec, Scenario) {
-    let text = format!(
-        "robot = {:?}\nduration = 1.0\n[platform]\nvelocity = 0.02\n[controller]\nsensor = \"encoder\"\nactuator = \"drive\"\n{gains}\n{robust}",
-        root().join(robot).display().to_string()
-    );
+    let text = scenario_text(robot, gains, robust);
     let scenario = Scenario::from_str(&text, Path::new("robust.toml")).expect("scenario");
     let robot_file = RobotSpec::from_file(&scenario.robot).expect("robot");
     let (robot, model) = assemble(robot_file.clone(), &scenario).expect("model");
@@ -42,6 +39,14 @@ fn study_with_servo(robot: &str, gains: &str, robust: &str) -> (Loaded, RobotSpe
         model,
     };
     (loaded, robot_file, scenario)
+}
+
+/// The scenario file of such a study.
+fn scenario_text(robot: &str, gains: &str, robust: &str) -> String {
+    format!(
+        "robot = {:?}\nduration = 1.0\n[platform]\nvelocity = 0.02\n[controller]\nsensor = \"encoder\"\nactuator = \"drive\"\n{gains}\n{robust}",
+        root().join(robot).display().to_string()
+    )
 }
 
 /// The damping gain where the rigid stage's slipping equilibrium changes
@@ -175,6 +180,12 @@ fn patterns_draw_each_match_or_one_shared_draw() {
 #[test]
 fn nonsense_tables_are_named() {
     let error = |robust: &str| {
+        // Refused where the scenario loads (keys and kinds of values, as
+        // every table) or where the study reads the table (its meaning).
+        let text = scenario_text("robots/stage_1dof_rigid.urdf", "k = 1e5\nc = 250", robust);
+        if let Err(refusal) = Scenario::from_str(&text, Path::new("robust.toml")) {
+            return refusal.to_string();
+        }
         let (_, robot_file, scenario) = study("robots/stage_1dof_rigid.urdf", robust);
         RobustSpec::from_scenario(&scenario, &robot_file, None, None)
             .expect_err("refused")

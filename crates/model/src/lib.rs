@@ -79,7 +79,7 @@ pub mod rule;
 
 // The rooms' modules at the crate root, where users (and the crate) name them.
 pub(crate) use files::urdf_check;
-pub use files::{compensation, input, mat, output, reference, robot, scenario};
+pub use files::{compensation, input, mat, output, reference, robot, scenario, studies};
 pub use linear::{eigen, equilibrium, linearize, scalar};
 pub use physics::{body_motion, dahl, dynamics, lugre, servo};
 pub(crate) use physics::{bristle, evaluator, laws, rooted, rows, translational, values};

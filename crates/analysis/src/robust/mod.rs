@@ -38,78 +38,16 @@ mod study;
 pub mod table;
 pub mod tune;
 
-use fistage_model::rule::readable_numbers;
+use fistage_model::studies::{Family, ParameterTable};
 use fistage_model::{LoadError, Loaded, Parameter, RobotSpec, Scenario};
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
 pub use distribution::Distribution;
 pub use sampling::{Design, Sampling};
 pub use statistics::{Probability, quantile, spearman};
 pub use study::RobustStudy;
 
-use crate::assess::{Analyses, Assessment, Outcome, in_parallel, study_with};
-
-/// The distribution families of the `distribution` key.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "snake_case")]
-enum Family {
-    Uniform,
-    Normal,
-    #[serde(alias = "truncated_normal")]
-    Truncnormal,
-    Lognormal,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawParameter {
-    parameter: String,
-    distribution: Family,
-    #[serde(default = "yes")]
-    relative: bool,
-    #[serde(default)]
-    shared: bool,
-    half_width: Option<f64>,
-    low: Option<f64>,
-    high: Option<f64>,
-    mean: Option<f64>,
-    median: Option<f64>,
-    sd: Option<f64>,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawRobust {
-    #[serde(default = "default_samples")]
-    samples: usize,
-    #[serde(default)]
-    seed: u64,
-    #[serde(default = "linear")]
-    analysis: Analyses,
-    #[serde(default = "sobol")]
-    sampling: Sampling,
-    duration: Option<f64>,
-    #[serde(default = "default_threshold")]
-    oscillation_threshold: f64,
-    #[serde(rename = "parameter", default)]
-    parameters: Vec<RawParameter>,
-}
-
-fn yes() -> bool {
-    true
-}
-fn default_samples() -> usize {
-    1000
-}
-fn linear() -> Analyses {
-    Analyses::Linear
-}
-fn sobol() -> Sampling {
-    Sampling::Sobol
-}
-fn default_threshold() -> f64 {
-    1e-9
-}
+use crate::assess::{Assessment, Outcome, in_parallel, study_with};
 
 /// Samples a study may have (checked before anything is allocated).
 pub const MAX_SAMPLES: usize = 1_000_000;
@@ -205,11 +143,8 @@ impl RobustSpec {
     ) -> Result<Self, LoadError> {
         let raw = scenario
             .robust
-            .clone()
+            .as_ref()
             .ok_or_else(|| scenario.error("robust", "the scenario has no [robust] table"))?;
-        let raw: RawRobust = raw.try_into().map_err(|e: toml::de::Error| {
-            scenario.error("robust", readable_numbers(e.to_string().trim()))
-        })?;
         let samples = samples.unwrap_or(raw.samples);
         if samples == 0 || samples > MAX_SAMPLES {
             return Err(scenario.error(
@@ -331,7 +266,7 @@ impl RobustSpec {
 /// The targets of one `[[robust.parameter]]` entry, each with its resolved
 /// distribution, checked against the parameter's rule.
 fn resolve_entry(
-    entry: &RawParameter,
+    entry: &ParameterTable,
     key: &str,
     scenario: &Scenario,
     robot: &RobotSpec,
@@ -372,7 +307,7 @@ fn resolve_entry(
 /// The distribution an entry gives a parameter of this nominal value, or
 /// (key, why) for the first key at fault.
 fn distribution_of(
-    entry: &RawParameter,
+    entry: &ParameterTable,
     nominal: f64,
 ) -> Result<Distribution, (&'static str, String)> {
     let need = |field: &'static str, value: Option<f64>| -> Result<f64, (&'static str, String)> {

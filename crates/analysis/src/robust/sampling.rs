@@ -13,20 +13,8 @@
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha12Rng;
-use serde::{Deserialize, Serialize};
 
-/// How the unit cube is sampled.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Sampling {
-    /// Scrambled Sobol (quasi-Monte Carlo).
-    Sobol,
-    /// Plain Monte Carlo.
-    Random,
-    /// Latin hypercube.
-    #[serde(alias = "latin_hypercube")]
-    Lhs,
-}
+pub use fistage_model::studies::Sampling;
 
 /// Samples a scrambled Sobol design may have.
 pub const MAX_SOBOL_SAMPLES: usize = 1 << 16;

@@ -36,7 +36,8 @@ use crate::compensation::{
 };
 use crate::error::LoadError;
 use crate::reference::{MoveProfile, Reference};
-use crate::rule::Rule;
+use crate::rule::{Rule, readable_numbers};
+use crate::studies::{RobustTable, SweepTable};
 
 /// The scenario file as written, before checks.
 #[derive(Debug, Clone, Deserialize)]
@@ -75,10 +76,10 @@ struct ScenarioFile {
     output: OutputFile,
     #[serde(default)]
     statistics: StatisticsFile,
-    /// Parameter sweeps are read by the analysis crate; kept as raw TOML here.
-    sweep: Option<toml::Value>,
-    /// Tolerance analyses likewise.
-    robust: Option<toml::Value>,
+    /// A parameter sweep (its meaning is the analysis crate's).
+    sweep: Option<SweepTable>,
+    /// A tolerance analysis likewise.
+    robust: Option<RobustTable>,
 }
 
 fn default_gravity() -> [f64; 3] {
@@ -503,10 +504,10 @@ pub struct Scenario {
     /// Half-width of the band around its target that a staircase step must
     /// enter and stay in to count as settled, m (default 50 nm).
     pub settle_window: f64,
-    /// The raw `[sweep]` table, when present.
-    pub sweep: Option<toml::Value>,
-    /// The raw `[robust]` table (a tolerance analysis), when present.
-    pub robust: Option<toml::Value>,
+    /// The `[sweep]` table, when present.
+    pub sweep: Option<SweepTable>,
+    /// The `[robust]` table (a tolerance analysis), when present.
+    pub robust: Option<RobustTable>,
 }
 
 impl Scenario {
@@ -533,9 +534,16 @@ impl Scenario {
 
     /// Reads and checks scenario TOML; relative paths resolve against `file`'s folder.
     pub fn from_str(text: &str, file: &Path) -> Result<Self, LoadError> {
-        let raw: ScenarioFile = toml::from_str(text).map_err(|e| LoadError::Syntax {
-            file: file.to_path_buf(),
-            message: crate::rule::readable_numbers(e.to_string().trim_end()).replace('\n', "\n  "),
+        let raw: ScenarioFile = toml::from_str(text).map_err(|e| {
+            let message = readable_numbers(e.to_string().trim_end()).replace('\n', "\n  ");
+            let table = e.span().and_then(|span| table_at(text, span.start));
+            LoadError::Syntax {
+                file: file.to_path_buf(),
+                message: match table {
+                    Some(table) => format!("{table}: {message}"),
+                    None => message,
+                },
+            }
         })?;
         let base = file.parent().unwrap_or(Path::new(""));
         let checker = Checker { file };
@@ -955,6 +963,18 @@ impl Checker<'_> {
     }
 }
 
+/// The header of the table (`[sweep]`, `[[robust.parameter]]`) that holds
+/// byte `offset` of a TOML text, if any does: parser messages show the line,
+/// not the table it belongs to.
+fn table_at(text: &str, offset: usize) -> Option<&str> {
+    let before = text.get(..offset)?;
+    before
+        .lines()
+        .map(str::trim)
+        .rfind(|line| line.starts_with('['))
+        .map(|line| line.split('#').next().unwrap_or(line).trim_end())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -983,6 +1003,44 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("speed"), "{e}");
+    }
+
+    /// `[sweep]` and `[robust]` are read with the rest: a key they do not
+    /// have is refused when the scenario loads, by every command, where it
+    /// was once refused only by the command that ran the study.
+    #[test]
+    fn study_tables_refuse_unknown_keys_on_load() {
+        let head = "robot = \"r.urdf\"\nduration = 1\n";
+        let sweep = "[[sweep.axis]]\nparameter = \"alpha\"\nfrom = 1\nto = 2\npoints = 3\n";
+        let s = parse(&format!("{head}{sweep}")).unwrap();
+        let table = s.sweep.expect("a [sweep] table");
+        assert_eq!(table.axes[0].points, Some(3));
+        assert_eq!(table.oscillation_threshold, 1e-9);
+        for (text, key) in [
+            (format!("{head}{sweep}step = 2\n"), "step"),
+            (format!("{head}[sweep]\naxes = []\n"), "axes"),
+            (
+                format!(
+                    "{head}[robust]\nsamples = 8\n[[robust.parameter]]\nparameter = \"alpha\"\ndistribution = \"normal\"\nsigma = 0.1\n"
+                ),
+                "sigma",
+            ),
+            (format!("{head}[robust]\nsample = 8\n"), "sample"),
+        ] {
+            let e = parse(&text).unwrap_err().to_string();
+            assert!(
+                e.contains("scenarios/test.toml") && e.contains(key),
+                "{key}: {e}"
+            );
+            assert!(
+                e.contains("sweep") || e.contains("robust"),
+                "names the table: {e}"
+            );
+        }
+        let e = parse(&format!("{head}[robust]\nsampling = \"grid\"\n"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("grid") && e.contains("sobol"), "{e}");
     }
 
     #[test]
