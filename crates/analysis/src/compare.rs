@@ -207,6 +207,27 @@ impl Comparison {
         self.len() == 0
     }
 
+    /// The first axis's parameter, or "case" without axes: the curves' x.
+    pub fn x_label(&self) -> String {
+        self.axes
+            .first()
+            .map_or("case".into(), |a| a.parameter.clone())
+    }
+
+    /// [`Comparison::x_label`] with the parameter's unit, for plots.
+    pub fn x_label_with_unit(&self) -> String {
+        let case = &self.cases[self.cases.len() - 1];
+        let unit = self.axes.first().and_then(|a| {
+            Parameter::resolve(&a.parameter, &case.loaded.scenario, &case.robot_file)
+                .ok()
+                .map(|p| p.unit())
+        });
+        match unit {
+            Some(unit) => format!("{} [{unit}]", self.x_label()),
+            None => self.x_label(),
+        }
+    }
+
     /// The case and axis values of item `index`.
     pub fn item(&self, mut index: usize) -> (usize, Vec<Option<f64>>) {
         for (c, case) in self.cases.iter().enumerate() {

@@ -12,9 +12,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use fistage_analysis::compare::{Case, CompareRow, Comparison, Curve, Metric};
-use fistage_analysis::sweep::{Spacing, SweepSpec};
+use fistage_analysis::sweep::SweepSpec;
 use fistage_model::RobotSpec;
-use fistage_plot::{Series, XyPlot, write_xy};
 
 use fistage_analysis::study::{Provenance, write_table};
 
@@ -129,7 +128,7 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
     write_table(&comparison, &rows, &folder)?;
     let curves = comparison.curves(&rows);
     write_curves(&comparison, &curves, folder.path())?;
-    let pictures = draw(&comparison, &curves, folder.path())?;
+    let pictures = fistage_plot::figures::compare::write(&comparison, &curves, folder.path())?;
     folder.commit()?;
     report(&comparison, &rows, &curves, &out_dir, &pictures);
     let missing: usize = curves.iter().flat_map(|c| &c.missing).sum();
@@ -143,33 +142,11 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The first axis's name for tables.
-fn x_label(comparison: &Comparison) -> String {
-    comparison
-        .axes
-        .first()
-        .map_or("case".into(), |a| a.parameter.clone())
-}
-
-/// The first axis's name and unit for plots.
-fn x_label_with_unit(comparison: &Comparison) -> String {
-    let case = &comparison.cases[comparison.cases.len() - 1];
-    let unit = comparison.axes.first().and_then(|a| {
-        fistage_model::Parameter::resolve(&a.parameter, &case.loaded.scenario, &case.robot_file)
-            .ok()
-            .map(|p| p.unit())
-    });
-    match unit {
-        Some(unit) => format!("{} [{unit}]", x_label(comparison)),
-        None => x_label(comparison),
-    }
-}
-
 fn write_curves(comparison: &Comparison, curves: &[Curve], out_dir: &Path) -> anyhow::Result<()> {
     let metric = comparison.metric.name();
     let mut text = format!(
         "case,{},{metric}_mean,{metric}_std,reduction_percent_mean,reduction_percent_std,points,missing\n",
-        x_label(comparison)
+        comparison.x_label()
     );
     let number = |v: f64| {
         if v.is_finite() {
@@ -214,7 +191,7 @@ fn write_curves(comparison: &Comparison, curves: &[Curve], out_dir: &Path) -> an
     let summary = serde_json::json!({
         "metric": metric,
         "unit": comparison.metric.unit(),
-        "x": x_label(comparison),
+        "x": comparison.x_label(),
         "baseline": comparison.has_baseline.then(|| comparison.cases[0].name.clone()),
         "curves": json,
     });
@@ -222,92 +199,6 @@ fn write_curves(comparison: &Comparison, curves: &[Curve], out_dir: &Path) -> an
     std::fs::write(&path, serde_json::to_string_pretty(&summary)? + "\n")
         .with_context(|| format!("cannot write {}", path.display()))?;
     Ok(())
-}
-
-/// A legend label: the case's title, or its name.
-fn label(comparison: &Comparison, case: usize) -> String {
-    let case = &comparison.cases[case];
-    if case.loaded.scenario.title.is_empty() {
-        case.name.clone()
-    } else {
-        crate::figures::figure_title(&case.loaded)
-    }
-}
-
-fn draw(comparison: &Comparison, curves: &[Curve], out_dir: &Path) -> anyhow::Result<Vec<String>> {
-    let x_log = comparison
-        .axes
-        .first()
-        .is_some_and(|a| a.spacing == Spacing::Log);
-    let band = |mean: &[f64], std: &[f64], sign: f64| -> Vec<f64> {
-        mean.iter().zip(std).map(|(m, s)| m + sign * s).collect()
-    };
-    let spread = if comparison.axes.len() >= 2 {
-        format!("mean, +-1 sigma over {}", comparison.axes[1].parameter)
-    } else {
-        "mean, +-1 sigma over the run's events".into()
-    };
-    let metric = comparison.metric;
-    let mut plots = vec![(
-        format!("{}.svg", metric.name()),
-        XyPlot {
-            x_log,
-            ..XyPlot::new(
-                metric.name().replace('_', " "),
-                x_label_with_unit(comparison),
-                format!("{} [{}] ({spread})", metric.name(), metric.unit()),
-                curves
-                    .iter()
-                    .map(|c| {
-                        Series::line_and_markers(
-                            label(comparison, c.case),
-                            c.x.clone(),
-                            c.mean.clone(),
-                        )
-                        .with_band(band(&c.mean, &c.std, -1.0), band(&c.mean, &c.std, 1.0))
-                    })
-                    .collect(),
-            )
-        },
-    )];
-    if comparison.has_baseline {
-        plots.push((
-            format!("{}_reduction.svg", metric.name()),
-            XyPlot {
-                x_log,
-                ..XyPlot::new(
-                    format!(
-                        "{} reduction against {}",
-                        metric.name().replace('_', " "),
-                        comparison.cases[0].name
-                    ),
-                    x_label_with_unit(comparison),
-                    format!("reduction [%] ({spread})"),
-                    curves
-                        .iter()
-                        .skip(1)
-                        .map(|c| {
-                            let (m, s) = (&c.reduction_mean, &c.reduction_std);
-                            Series::line_and_markers(
-                                label(comparison, c.case),
-                                c.x.clone(),
-                                m.clone(),
-                            )
-                            .with_band(band(m, s, -1.0), band(m, s, 1.0))
-                        })
-                        .collect(),
-                )
-            },
-        ));
-    }
-    let mut written = Vec::new();
-    for (name, plot) in plots {
-        for file in [name.clone(), name.replace(".svg", ".png")] {
-            write_xy(&plot, &out_dir.join(&file))?;
-        }
-        written.push(name);
-    }
-    Ok(written)
 }
 
 fn report(
@@ -361,7 +252,7 @@ fn report(
             };
             println!(
                 "  {} = {:.4e}: {} {:.4e} +- {:.2e} {}{reduction}{missing}",
-                x_label(comparison),
+                comparison.x_label(),
                 curve.x[i],
                 metric.name(),
                 curve.mean[i],

@@ -8,7 +8,6 @@
 mod absent;
 mod check;
 mod compare;
-mod figures;
 mod fmu;
 mod identify;
 

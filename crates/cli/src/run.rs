@@ -10,7 +10,7 @@ use anyhow::Context;
 use fistage_model::EngineKind;
 use fistage_sim::RunOutput;
 
-use crate::{figures, progress};
+use crate::progress;
 use fistage_model::output::ResultFolder;
 
 /// Arguments of `fistage run`.
@@ -89,7 +89,9 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     write_summary(&loaded, &output, &staging.join("summary.json"))?;
     written.push("summary.json".to_string());
     if !args.no_plots {
-        written.extend(figures::run_figures(&loaded, &output, staging)?);
+        written.extend(fistage_plot::figures::run::write(
+            &loaded, &output, staging,
+        )?);
     }
     let out_dir = folder.commit()?;
     print_summary(&loaded, &output);

@@ -12,7 +12,6 @@ use anyhow::{Context, bail};
 use fistage_analysis::robust::RobustSpec;
 use fistage_analysis::robust::tune::{Criterion, Population, TuneSettings, Tuning, tune};
 use fistage_model::RobotSpec;
-use fistage_plot::{ColourScale, Heatmap, Series, write_heatmap};
 
 use crate::progress;
 use fistage_model::output::ResultFolder;
@@ -141,7 +140,6 @@ fn write(tuning: &Tuning, dir: &std::path::Path) -> anyhow::Result<()> {
     std::fs::write(&json, serde_json::to_string_pretty(tuning)? + "\n")
         .with_context(|| format!("cannot write {}", json.display()))?;
     let mut csv = String::from("k,c,worst_max_real_eig,unstable,undetermined,members\n");
-    let mut values = Vec::with_capacity(tuning.grid.len());
     for (i, s) in tuning.grid.iter().enumerate() {
         let (k, c) = (tuning.k[i % tuning.k.len()], tuning.c[i / tuning.k.len()]);
         let worst = if s.worst_max_real_eig.is_finite() {
@@ -153,34 +151,10 @@ fn write(tuning: &Tuning, dir: &std::path::Path) -> anyhow::Result<()> {
             "{k:e},{c:e},{worst},{},{},{}\n",
             s.unstable, s.undetermined, s.members
         ));
-        values.push(if s.undetermined > 0 {
-            f64::NAN
-        } else {
-            s.worst_max_real_eig
-        });
     }
     let path = dir.join("region.csv");
     std::fs::write(&path, csv).with_context(|| format!("cannot write {}", path.display()))?;
-    let mut map = Heatmap::new(
-        format!("worst largest real part over {} stages", tuning.members),
-        "k [N/m]",
-        "c [N s/m]",
-        tuning.k.clone(),
-        tuning.c.clone(),
-        values,
-        ColourScale::Diverging,
-    );
-    map.x_log = true;
-    map.y_log = true;
-    map.value_label = "max Re(lambda) over the population [1/s]".into();
-    if let Some([k, c]) = tuning.gains {
-        map.overlay
-            .push(Series::markers("chosen gains", vec![k], vec![c]));
-    }
-    for extension in ["svg", "png"] {
-        let name = format!("region.{extension}");
-        write_heatmap(&map, &dir.join(&name)).with_context(|| format!("cannot draw {name}"))?;
-    }
+    fistage_plot::figures::tune::write(tuning, dir)?;
     Ok(())
 }
 

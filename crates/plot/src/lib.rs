@@ -1,6 +1,12 @@
 //! fistage-plot: publication-quality SVG and PNG figures of fistage results (time responses,
 //! phase portraits, heatmaps, Bode plots), with no system libraries needed.
 //!
+//! Two layers: the drawing primitives at the crate root ([`Figure`], [`XyPlot`], [`Heatmap`],
+//! [`write_bode`]), which know nothing of stages, and [`figures`], one file per kind of result
+//! (a run, modes, a sweep, a comparison, a population, a gain search, the fits), which turns
+//! the libraries' result types into those primitives. The program, the Python package and
+//! anyone else draw a result the same way: `figures::run::write(&loaded, &output, dir)`.
+//!
 //! Every writer takes the output path; `.svg` or `.png` (any case) selects the format. Text
 //! uses the embedded DejaVu Sans font. Non-finite values are skipped (lines break there),
 //! panels without drawable data say "no data", and very long series are reduced per pixel
@@ -35,6 +41,7 @@ mod coverage;
 mod decimate;
 mod error;
 mod figure;
+pub mod figures;
 mod font;
 mod geometry;
 mod heatmap;

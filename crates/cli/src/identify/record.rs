@@ -23,11 +23,10 @@ use fistage_ident::record::{
     record_override,
 };
 use fistage_ident::{Loss, Quantity, UnitOverrides};
-use fistage_plot::{Figure, Panel, Series, write_figure};
 
 use super::shared::{
     OutputArgs, SimulateArgs, check_element, nothing_written, print_report, refuse_undetermined,
-    short_name, unit_flag,
+    unit_flag,
 };
 use fistage_model::output::ResultFolder;
 
@@ -218,45 +217,8 @@ fn write_record_outputs(
         let path = dir.join(name);
         std::fs::write(&path, text).with_context(|| format!("{}: cannot write", path.display()))?;
     }
-    let figure = fit_figure(record, fit);
-    for name in ["fit.svg", "fit.png"] {
-        write_figure(&figure, &dir.join(name))?;
-    }
+    fistage_plot::figures::record::write(record, fit, dir)?;
     Ok(())
-}
-
-/// Measured and simulated position (mm), the residual (nm) and the force (N)
-/// against time.
-fn fit_figure(record: &Record, fit: &RecordFit) -> Figure {
-    let t = record.time.clone();
-    let mm = |x: &[f64]| x.iter().map(|v| v * 1e3).collect::<Vec<f64>>();
-    let residual: Vec<f64> = fit
-        .simulated
-        .iter()
-        .zip(&record.position)
-        .map(|(s, m)| (s - m) * 1e9)
-        .collect();
-    Figure::new(
-        format!("Record fit: {}", short_name(&record.source)),
-        "time (s)",
-        vec![
-            Panel::new(
-                "position (mm)",
-                vec![
-                    Series::line("measured", t.clone(), mm(&record.position)),
-                    Series::line("simulated (fit)", t.clone(), mm(&fit.simulated)),
-                ],
-            ),
-            Panel::new(
-                "residual (nm)",
-                vec![Series::line("simulated - measured", t.clone(), residual)],
-            ),
-            Panel::new(
-                "force (N)",
-                vec![Series::line("force command", t, record.force.clone())],
-            ),
-        ],
-    )
 }
 
 /// Runs `fistage identify simulate-record`.

@@ -2,7 +2,7 @@
 //! arguments, the refusal of undetermined parameters, the report printing
 //! and the unit flags.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use clap::Args;
@@ -110,12 +110,4 @@ pub(super) fn unit_flag(quantity: Quantity, flag: &Option<String>) -> Result<Opt
             quantity.known_units()
         ),
     }
-}
-
-/// The file name of a data source, for plot titles.
-pub(super) fn short_name(source: &str) -> &str {
-    Path::new(source)
-        .file_name()
-        .and_then(|n| n.to_str())
-        .unwrap_or(source)
 }

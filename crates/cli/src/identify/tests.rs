@@ -7,9 +7,9 @@ use std::path::{Path, PathBuf};
 
 use fistage_ident::{Quantity, StribeckOptions, UnitOverrides, fit_stribeck, read_stribeck_csv};
 
-use super::curve::stribeck_plot;
 use fistage_ident::synth::{FrfCsvLayout, FrfSynth, StribeckSynth, frf_csv, stribeck_csv, unit};
 use fistage_model::LugreParams;
+use fistage_plot::figures::curve::stribeck_plot;
 
 #[derive(Parser)]
 struct TestCli {

@@ -1,46 +1,25 @@
-//! The figures `fistage run` draws: stacked time responses (sensor and
-//! reference, joint positions, friction forces, actuator force) and a phase
-//! portrait of the sensor (velocity against position), each as SVG and PNG.
+//! The figures of a run: stacked time responses (sensor and reference, joint
+//! positions, friction forces, actuator force) and a phase portrait of the
+//! sensor (velocity against position).
 
 use std::path::Path;
 
-use anyhow::Context;
 use fistage_model::{JointMotion, Loaded};
-use fistage_plot::{Figure, Panel, Series, XyPlot, write_figure, write_xy};
 use fistage_sim::{RunOutput, SignalTable};
 
-/// A length unit chosen so that plotted numbers stay readable.
-struct LengthUnit {
-    name: &'static str,
-    scale: f64,
-}
+use super::svg_and_png;
+use super::units::{length_unit, scaled};
+use crate::{Figure, Panel, PlotError, Series, XyPlot, write_figure, write_xy};
 
-fn length_unit(values: &[&[f64]]) -> LengthUnit {
-    let largest = values
-        .iter()
-        .flat_map(|v| v.iter())
-        .filter(|v| v.is_finite())
-        .fold(0.0_f64, |m, v| m.max(v.abs()));
-    if largest >= 1e-2 {
-        LengthUnit {
-            name: "mm",
-            scale: 1e3,
-        }
-    } else if largest >= 1e-5 {
-        LengthUnit {
-            name: "µm",
-            scale: 1e6,
-        }
-    } else {
-        LengthUnit {
-            name: "nm",
-            scale: 1e9,
-        }
+/// Draws `response` and, where the stage has a sensor, `phase` into `dir`;
+/// returns the file names.
+pub fn write(loaded: &Loaded, output: &RunOutput, dir: &Path) -> Result<Vec<String>, PlotError> {
+    let response = response_figure(loaded, &output.signals);
+    let mut written = svg_and_png(dir, "response", |path| write_figure(&response, path))?;
+    if let Some(portrait) = phase_portrait(loaded, &output.signals) {
+        written.extend(svg_and_png(dir, "phase", |path| write_xy(&portrait, path))?);
     }
-}
-
-fn scaled(values: &[f64], scale: f64) -> Vec<f64> {
-    values.iter().map(|v| v * scale).collect()
+    Ok(written)
 }
 
 /// Signals of the table whose names end in `suffix` and whose unit is `unit`.
@@ -144,23 +123,8 @@ fn response_figure(loaded: &Loaded, table: &SignalTable) -> Figure {
             ),
         ),
     ];
-    let title = figure_title(loaded);
+    let title = super::title(loaded);
     Figure::new(title, "time [s]", panels.into_iter().flatten().collect())
-}
-
-/// The scenario's title, shortened to fit a figure's width.
-pub fn figure_title(loaded: &Loaded) -> String {
-    const LONGEST: usize = 70;
-    let title = if loaded.scenario.title.is_empty() {
-        loaded.scenario.file.display().to_string()
-    } else {
-        loaded.scenario.title.clone()
-    };
-    if title.chars().count() <= LONGEST {
-        return title;
-    }
-    let cut: String = title.chars().take(LONGEST - 3).collect();
-    format!("{}...", cut.trim_end())
 }
 
 /// Velocity against position of the first sensor: the whole run, and the
@@ -194,29 +158,4 @@ fn phase_portrait(loaded: &Loaded, table: &SignalTable) -> Option<XyPlot> {
             ),
         ],
     ))
-}
-
-/// Writes the run's figures into `out_dir`; returns their file names.
-pub fn run_figures(
-    loaded: &Loaded,
-    output: &RunOutput,
-    out_dir: &Path,
-) -> anyhow::Result<Vec<String>> {
-    let mut written = Vec::new();
-    let response = response_figure(loaded, &output.signals);
-    for extension in ["svg", "png"] {
-        let name = format!("response.{extension}");
-        write_figure(&response, &out_dir.join(&name))
-            .with_context(|| format!("cannot draw {name}"))?;
-        written.push(name);
-    }
-    if let Some(portrait) = phase_portrait(loaded, &output.signals) {
-        for extension in ["svg", "png"] {
-            let name = format!("phase.{extension}");
-            write_xy(&portrait, &out_dir.join(&name))
-                .with_context(|| format!("cannot draw {name}"))?;
-            written.push(name);
-        }
-    }
-    Ok(written)
 }
