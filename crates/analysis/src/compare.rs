@@ -207,6 +207,71 @@ impl Comparison {
         self.len() == 0
     }
 
+    /// The curves as `curves.csv`: one row per case and x, empty where a value is missing.
+    pub fn curves_csv(&self, curves: &[Curve]) -> String {
+        let metric = self.metric.name();
+        let mut text = format!(
+            "case,{},{metric}_mean,{metric}_std,reduction_percent_mean,reduction_percent_std,points,missing\n",
+            self.x_label()
+        );
+        let number = |v: f64| {
+            if v.is_finite() {
+                format!("{v:e}")
+            } else {
+                String::new()
+            }
+        };
+        for curve in curves {
+            let name = &self.cases[curve.case].name;
+            for i in 0..curve.x.len() {
+                let reduction = |v: &[f64]| v.get(i).copied().unwrap_or(f64::NAN);
+                text.push_str(&format!(
+                    "{name},{},{},{},{},{},{},{}\n",
+                    number(curve.x[i]),
+                    number(curve.mean[i]),
+                    number(curve.std[i]),
+                    number(reduction(&curve.reduction_mean)),
+                    number(reduction(&curve.reduction_std)),
+                    curve.points[i],
+                    curve.missing[i]
+                ));
+            }
+        }
+        text
+    }
+
+    /// The curves as `summary.json`: the metric, its unit, the x, the
+    /// baseline and each case's curve (missing values as null).
+    pub fn curves_summary(&self, curves: &[Curve]) -> serde_json::Value {
+        let finite = |v: &[f64]| -> Vec<Option<f64>> {
+            v.iter().map(|x| x.is_finite().then_some(*x)).collect()
+        };
+        let json: Vec<serde_json::Value> = curves
+            .iter()
+            .map(|curve| {
+                let case = &self.cases[curve.case];
+                serde_json::json!({
+                    "case": case.name,
+                    "title": case.loaded.scenario.title,
+                    "x": finite(&curve.x),
+                    "mean": finite(&curve.mean),
+                    "std": finite(&curve.std),
+                    "reduction_percent_mean": finite(&curve.reduction_mean),
+                    "reduction_percent_std": finite(&curve.reduction_std),
+                    "points": curve.points,
+                    "missing": curve.missing,
+                })
+            })
+            .collect();
+        serde_json::json!({
+            "metric": self.metric.name(),
+            "unit": self.metric.unit(),
+            "x": self.x_label(),
+            "baseline": self.has_baseline.then(|| self.cases[0].name.clone()),
+            "curves": json,
+        })
+    }
+
     /// The first axis's parameter, or "case" without axes: the curves' x.
     pub fn x_label(&self) -> String {
         self.axes

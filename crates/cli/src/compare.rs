@@ -143,61 +143,12 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
 }
 
 fn write_curves(comparison: &Comparison, curves: &[Curve], out_dir: &Path) -> anyhow::Result<()> {
-    let metric = comparison.metric.name();
-    let mut text = format!(
-        "case,{},{metric}_mean,{metric}_std,reduction_percent_mean,reduction_percent_std,points,missing\n",
-        comparison.x_label()
-    );
-    let number = |v: f64| {
-        if v.is_finite() {
-            format!("{v:e}")
-        } else {
-            String::new()
-        }
-    };
-    let mut json = Vec::new();
-    for curve in curves {
-        let name = &comparison.cases[curve.case].name;
-        for i in 0..curve.x.len() {
-            let reduction = |v: &[f64]| v.get(i).copied().unwrap_or(f64::NAN);
-            text.push_str(&format!(
-                "{name},{},{},{},{},{},{},{}\n",
-                number(curve.x[i]),
-                number(curve.mean[i]),
-                number(curve.std[i]),
-                number(reduction(&curve.reduction_mean)),
-                number(reduction(&curve.reduction_std)),
-                curve.points[i],
-                curve.missing[i]
-            ));
-        }
-        let finite = |v: &[f64]| -> Vec<Option<f64>> {
-            v.iter().map(|x| x.is_finite().then_some(*x)).collect()
-        };
-        json.push(serde_json::json!({
-            "case": name,
-            "title": comparison.cases[curve.case].loaded.scenario.title,
-            "x": finite(&curve.x),
-            "mean": finite(&curve.mean),
-            "std": finite(&curve.std),
-            "reduction_percent_mean": finite(&curve.reduction_mean),
-            "reduction_percent_std": finite(&curve.reduction_std),
-            "points": curve.points,
-            "missing": curve.missing,
-        }));
-    }
     let path = out_dir.join("curves.csv");
-    std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?;
-    let summary = serde_json::json!({
-        "metric": metric,
-        "unit": comparison.metric.unit(),
-        "x": comparison.x_label(),
-        "baseline": comparison.has_baseline.then(|| comparison.cases[0].name.clone()),
-        "curves": json,
-    });
-    let path = out_dir.join("summary.json");
-    std::fs::write(&path, serde_json::to_string_pretty(&summary)? + "\n")
+    std::fs::write(&path, comparison.curves_csv(curves))
         .with_context(|| format!("cannot write {}", path.display()))?;
+    let path = out_dir.join("summary.json");
+    let summary = serde_json::to_string_pretty(&comparison.curves_summary(curves))? + "\n";
+    std::fs::write(&path, summary).with_context(|| format!("cannot write {}", path.display()))?;
     Ok(())
 }
 

@@ -139,21 +139,9 @@ fn write(tuning: &Tuning, dir: &std::path::Path) -> anyhow::Result<()> {
     let json = dir.join("tune.json");
     std::fs::write(&json, serde_json::to_string_pretty(tuning)? + "\n")
         .with_context(|| format!("cannot write {}", json.display()))?;
-    let mut csv = String::from("k,c,worst_max_real_eig,unstable,undetermined,members\n");
-    for (i, s) in tuning.grid.iter().enumerate() {
-        let (k, c) = (tuning.k[i % tuning.k.len()], tuning.c[i / tuning.k.len()]);
-        let worst = if s.worst_max_real_eig.is_finite() {
-            format!("{:e}", s.worst_max_real_eig)
-        } else {
-            String::new()
-        };
-        csv.push_str(&format!(
-            "{k:e},{c:e},{worst},{},{},{}\n",
-            s.unstable, s.undetermined, s.members
-        ));
-    }
     let path = dir.join("region.csv");
-    std::fs::write(&path, csv).with_context(|| format!("cannot write {}", path.display()))?;
+    std::fs::write(&path, tuning.region_csv())
+        .with_context(|| format!("cannot write {}", path.display()))?;
     fistage_plot::figures::tune::write(tuning, dir)?;
     Ok(())
 }

@@ -130,6 +130,27 @@ pub struct Tuning {
     pub remedies: Vec<Remedy>,
 }
 
+impl Tuning {
+    /// The grid as `region.csv`: k, c, the worst largest real part (empty
+    /// where not finite), the unstable and undetermined counts and the members.
+    pub fn region_csv(&self) -> String {
+        let mut csv = String::from("k,c,worst_max_real_eig,unstable,undetermined,members\n");
+        for (i, s) in self.grid.iter().enumerate() {
+            let (k, c) = (self.k[i % self.k.len()], self.c[i / self.k.len()]);
+            let worst = if s.worst_max_real_eig.is_finite() {
+                format!("{:e}", s.worst_max_real_eig)
+            } else {
+                String::new()
+            };
+            csv.push_str(&format!(
+                "{k:e},{c:e},{worst},{},{},{}\n",
+                s.unstable, s.undetermined, s.members
+            ));
+        }
+        csv
+    }
+}
+
 fn log_grid([lo, hi]: [f64; 2], n: usize) -> Vec<f64> {
     if n < 2 {
         return vec![(lo * hi).sqrt()];
