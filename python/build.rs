@@ -1,14 +1,18 @@
-//! Builds the FMU's shared library (`fistage-fmi`, from the main workspace)
-//! so that `Scenario.export_fmu` needs nothing beside the installed
-//! package: the library's bytes are embedded in the extension module.
-//! `FISTAGE_FMI_LIBRARY` names a library built already (from this
-//! checkout) to embed instead.
+//! With the `embed-fmu` feature (maturin's builds), builds the FMU's shared
+//! library (`fistage-fmi`, from this workspace) so that `Scenario.export_fmu`
+//! needs nothing beside the installed package: the library's bytes are
+//! embedded in the extension module. `FISTAGE_FMI_LIBRARY` names a library
+//! built already (from this checkout) to embed instead. Without the feature
+//! (cargo's checks and tests of the workspace) it does nothing.
 
 use std::env;
 use std::path::PathBuf;
 use std::process::Command;
 
 fn main() {
+    if env::var_os("CARGO_FEATURE_EMBED_FMU").is_none() {
+        return;
+    }
     println!("cargo:rerun-if-env-changed=FISTAGE_FMI_LIBRARY");
     // A library already built from this checkout (CI builds it with the
     // tests and names it here) is embedded as it is.

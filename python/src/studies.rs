@@ -234,7 +234,11 @@ pub fn robust(
 }
 
 /// The FMU's shared library, built with this package (see `build.rs`).
-const EMBEDDED_LIBRARY: &[u8] = include_bytes!(env!("FISTAGE_FMI_EMBEDDED"));
+#[cfg(feature = "embed-fmu")]
+const EMBEDDED_LIBRARY: Option<&[u8]> = Some(include_bytes!(env!("FISTAGE_FMI_EMBEDDED")));
+/// Built without `embed-fmu` (a cargo build, not maturin's): no library inside.
+#[cfg(not(feature = "embed-fmu"))]
+const EMBEDDED_LIBRARY: Option<&[u8]> = None;
 
 /// A file removed when dropped.
 struct TemporaryFile(PathBuf);
@@ -264,12 +268,18 @@ pub fn export_fmu(
             )));
         }
         None => {
+            let Some(embedded) = EMBEDDED_LIBRARY else {
+                return Err(Error::new_err(
+                    "this build of the package holds no FMU library (built without the \
+                     `embed-fmu` feature): give library=, or install with pip install ./python",
+                ));
+            };
             let nanos = std::time::SystemTime::now()
                 .duration_since(std::time::UNIX_EPOCH)
                 .map_or(0, |d| d.subsec_nanos());
             let file =
                 std::env::temp_dir().join(format!("fistage-fmi-{}-{nanos}.so", std::process::id()));
-            std::fs::write(&file, EMBEDDED_LIBRARY)
+            std::fs::write(&file, embedded)
                 .map_err(|e| Error::new_err(format!("{}: cannot write: {e}", file.display())))?;
             (Some(TemporaryFile(file.clone())), file)
         }
