@@ -152,17 +152,26 @@ def _sweep(self, threads=None, progress=None, out=None, shard=None, merge=None, 
 
 
 def _robust(self, samples=None, seed=None, threads=None, progress=None, out=None, shard=None, merge=None,
-            force=False, resume=True):
+            force=False, resume=True, from_fit=None, from_fit_draw=None):
     """Runs the scenario's ``[robust]`` tolerance analysis as ``fistage
     robust`` does: ``samples`` and ``seed`` replace the table's when given.
     Returns a :class:`Study` with the columns of samples.csv and
     ``summary`` as summary.json (probabilities with their intervals,
     quantiles, sensitivities). ``out``, ``shard``, ``merge``, ``force`` and
     ``resume`` as for :meth:`Scenario.sweep` (the folder holds samples.csv,
-    summary.json and provenance.json)."""
+    summary.json and provenance.json).
+
+    ``from_fit`` (a fit's ``fit.json``) draws the fitted parameters jointly
+    from the fit's covariance (``from_fit_draw="normal"``, the default) or
+    its jackknife replicates (``"replicates"``), alone or with the table's
+    parameters: P(unstable) of the identified stage."""
     import json
 
     flags = _study_flags(out, shard, merge, force, resume)
+    if from_fit is not None:
+        flags["from_fit"] = str(from_fit)
+    if from_fit_draw is not None:
+        flags["from_fit_draw"] = from_fit_draw
     table, summary = self._robust(samples=samples, seed=seed, threads=threads, progress=progress, **flags)
     return Study(table, json.loads(summary))
 

@@ -289,11 +289,14 @@ impl Scenario {
     }
 
     /// robust(samples=None, seed=None, threads=None, progress=None,
-    /// out=None, shard=None, merge=None, force=False, resume=True) ->
-    /// (samples.csv text, summary.json text): the scenario's `[robust]`
-    /// tolerance analysis as `fistage robust` computes it (`out` and the
-    /// rest as for sweep).
-    #[pyo3(signature = (samples=None, seed=None, threads=None, progress=None, out=None, shard=None, merge=None, force=false, resume=true))]
+    /// out=None, shard=None, merge=None, force=False, resume=True,
+    /// from_fit=None, from_fit_draw=None) -> (samples.csv text, summary.json
+    /// text): the scenario's `[robust]` tolerance analysis as `fistage
+    /// robust` computes it (`out` and the rest as for sweep). `from_fit`
+    /// (a fit's fit.json, relative to the working folder) and
+    /// `from_fit_draw` ("normal" or "replicates") stand for the table's
+    /// keys; a scenario without `[robust]` then draws the fit alone.
+    #[pyo3(signature = (samples=None, seed=None, threads=None, progress=None, out=None, shard=None, merge=None, force=false, resume=true, from_fit=None, from_fit_draw=None))]
     #[allow(clippy::too_many_arguments)]
     fn _robust(
         &self,
@@ -307,9 +310,14 @@ impl Scenario {
         merge: Option<Vec<PathBuf>>,
         force: bool,
         resume: bool,
+        from_fit: Option<PathBuf>,
+        from_fit_draw: Option<String>,
     ) -> PyResult<(String, String)> {
-        let loaded = self.loaded().map_err(load_error)?;
+        let mut loaded = self.loaded().map_err(load_error)?;
         let (_, robot) = self.study().map_err(load_error)?;
+        if from_fit.is_some() || from_fit_draw.is_some() {
+            studies::draw_from_fit(&mut loaded, from_fit, from_fit_draw.as_deref())?;
+        }
         let call = studies::StudyCall::new(threads, progress, (out, shard, merge), force, resume);
         studies::robust(py, &loaded, &robot, &self.input(), (samples, seed), &call)
     }

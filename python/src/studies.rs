@@ -233,6 +233,34 @@ pub fn robust(
     Ok((table_text(&population, &rows), summary_json(&rows)))
 }
 
+/// Sets the scenario's `[robust] from_fit` and `from_fit_draw` (a table
+/// with every default when it has none); a relative `from_fit` is taken
+/// from the working folder, as Python reads paths.
+pub fn draw_from_fit(
+    loaded: &mut Loaded,
+    from_fit: Option<PathBuf>,
+    draw: Option<&str>,
+) -> PyResult<()> {
+    let table = loaded.scenario.robust.get_or_insert_with(Default::default);
+    if let Some(file) = from_fit {
+        let file = std::path::absolute(&file)
+            .map_err(|e| Error::new_err(format!("from_fit={}: {e}", file.display())))?;
+        table.from_fit = Some(file);
+    }
+    if let Some(draw) = draw {
+        table.from_fit_draw = match draw {
+            "normal" => fistage_model::studies::FitDraw::Normal,
+            "replicates" => fistage_model::studies::FitDraw::Replicates,
+            other => {
+                return Err(Error::new_err(format!(
+                    "from_fit_draw must be \"normal\" or \"replicates\", got \"{other}\""
+                )));
+            }
+        };
+    }
+    Ok(())
+}
+
 /// The FMU's shared library, built with this package (see `build.rs`).
 #[cfg(feature = "embed-fmu")]
 const EMBEDDED_LIBRARY: Option<&[u8]> = Some(include_bytes!(env!("FISTAGE_FMI_EMBEDDED")));

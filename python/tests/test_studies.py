@@ -50,6 +50,45 @@ def test_robust_summary_counts_its_samples(root):
     assert numpy.array_equal(again["max_real_eig"], study["max_real_eig"]), "seeded"
 
 
+def test_robust_draws_a_fit_jointly(root, tmp_path):
+    """from_fit draws the fitted parameters with the fit's covariance, here
+    the servo's stiffness and the bearing's bristle stiffness of the Fig. 5b
+    stage, strongly correlated: the drawn
+    columns have the fit's means and correlation within their sampling
+    error, and the table's own parameters are drawn beside them."""
+    import json
+
+    mean = [6e4, 2.2e6]
+    sd = [3e3, 1.1e5]
+    rho = 0.8
+    matrix = [[sd[0] ** 2, rho * sd[0] * sd[1]], [rho * sd[0] * sd[1], sd[1] ** 2]]
+    fit = {
+        "covariance": {
+            "parameters": ["k", "sigma0"],
+            "paths": ["controller.k", "overrides.bearing_friction.sigma0"],
+            "values": mean,
+            "matrix": matrix,
+            "log_matrix": [[matrix[i][j] / (mean[i] * mean[j]) for j in range(2)] for i in range(2)],
+            "method": "made by the test",
+            "degrees_of_freedom": 0,
+        },
+        "not_identifiable": [],
+    }
+    path = tmp_path / "fit.json"
+    path.write_text(json.dumps(fit))
+    scenario = fistage.load(root / "scenarios/robust/fig05b_population.toml")
+    n = 512
+    study = scenario.robust(samples=n, seed=2, from_fit=path)
+    k, c = study["controller.k"], study["overrides.bearing_friction.sigma0"]
+    assert len(study) == n and "overrides.isolator.k_x" in study.columns
+    for drawn, m, s in ((k, mean[0], sd[0]), (c, mean[1], sd[1])):
+        assert abs(drawn.mean() - m) < 4 * s / n ** 0.5
+    r = numpy.corrcoef(k, c)[0, 1]
+    assert abs(r - rho) < 4 * (1 - rho ** 2) / n ** 0.5, r
+    with pytest.raises(Exception, match="from_fit_draw"):
+        scenario.robust(samples=8, from_fit=path, from_fit_draw="bootstrap")
+
+
 def test_export_fmu_packages_the_scenario(root, tmp_path):
     """The package carries the FMU's library itself: nothing else is needed."""
     scenario = fistage.load(root / "scenarios/paper/fig05b_fi.toml")

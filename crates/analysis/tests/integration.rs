@@ -4,6 +4,7 @@
 //! crate graph is linked once for all of them.
 
 mod closed_loop_record;
+mod from_fit;
 mod lab;
 mod robust;
 mod sweep_settings;

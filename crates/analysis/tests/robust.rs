@@ -51,7 +51,7 @@ fn scenario_text(robot: &str, gains: &str, robust: &str) -> String {
 
 /// The damping gain where the rigid stage's slipping equilibrium changes
 /// stability, by bisection of the analytic Routh-Hurwitz conditions.
-fn routh_boundary(loaded: &Loaded) -> f64 {
+pub(crate) fn routh_boundary(loaded: &Loaded) -> f64 {
     let model = &loaded.model;
     let stage = |c: f64| RigidStage {
         mass: model.bodies()[0].mass,

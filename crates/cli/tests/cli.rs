@@ -1421,6 +1421,92 @@ fn record_identification_recovers_the_stage_from_csv_and_mat() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// The record fit's uncertainty carried into a population: `identify
+/// record` writes the joint covariance into fit.json, and `robust` with
+/// `from_fit` draws the fitted friction of the identified stage from it
+/// (the paths of `--element`); the drawn columns have the fit's means within
+/// their sampling error, and the provenance names the fit.
+#[test]
+fn a_population_is_drawn_from_a_record_fit() {
+    let dir = scratch("from-fit");
+    std::fs::create_dir_all(&dir).expect("scratch");
+    let robot = repository().join("robots/stage_1dof_rigid.urdf");
+    let csv = dir.join("run.csv");
+    simulate_record(&[robot.as_os_str(), "--out".as_ref(), csv.as_os_str()]);
+    let fit_dir = dir.join("fit");
+    succeeds(&[
+        "identify".as_ref(),
+        "record".as_ref(),
+        csv.as_os_str(),
+        "--out".as_ref(),
+        fit_dir.as_os_str(),
+    ]);
+    let fit: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(fit_dir.join("fit.json")).expect("fit.json"))
+            .expect("JSON");
+    let covariance = &fit["covariance"];
+    let paths: Vec<&str> = covariance["paths"]
+        .as_array()
+        .expect("paths")
+        .iter()
+        .filter_map(|p| p.as_str())
+        .collect();
+    assert!(
+        paths.contains(&"overrides.bearing_friction.sigma0"),
+        "{paths:?}"
+    );
+    assert_eq!(
+        fit["replicates"].as_array().expect("replicates").len(),
+        covariance["degrees_of_freedom"].as_u64().expect("dof") as usize + 1
+    );
+    let scenario = dir.join("population.toml");
+    std::fs::write(
+        &scenario,
+        format!(
+            "robot = {:?}\nduration = 1.0\n[platform]\nvelocity = 0.02\n[controller]\nsensor = \"encoder\"\nactuator = \"drive\"\nk = 1e5\nc = 250\n[robust]\nsamples = 400\nsampling = \"random\"\nfrom_fit = \"fit/fit.json\"\n",
+            robot.display().to_string()
+        ),
+    )
+    .expect("scenario");
+    let out = dir.join("population");
+    succeeds(&[
+        "robust".as_ref(),
+        scenario.as_os_str(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ]);
+    let table = std::fs::read_to_string(out.join("samples.csv")).expect("samples.csv");
+    let header: Vec<&str> = table.lines().next().expect("header").split(',').collect();
+    let rows: Vec<Vec<f64>> = table
+        .lines()
+        .skip(1)
+        .map(|l| {
+            l.split(',')
+                .map(|v| v.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect();
+    assert_eq!(rows.len(), 400);
+    let names = covariance["paths"].as_array().expect("paths");
+    for (k, path) in names.iter().enumerate() {
+        let Some(path) = path.as_str() else { continue };
+        let column = header.iter().position(|h| *h == path).expect(path);
+        let mean = rows.iter().map(|r| r[column]).sum::<f64>() / rows.len() as f64;
+        let fitted = covariance["values"][k].as_f64().expect("value");
+        let sd = covariance["matrix"][k][k]
+            .as_f64()
+            .expect("variance")
+            .sqrt();
+        assert!(
+            (mean - fitted).abs() < 4.0 * sd / (rows.len() as f64).sqrt(),
+            "{path}: drawn mean {mean:e}, fitted {fitted:e}, sd {sd:e}"
+        );
+    }
+    let provenance = std::fs::read_to_string(out.join("provenance.json")).expect("provenance");
+    assert!(provenance.contains("fit drawn from"), "{provenance}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// Whether the system tests are required (`.ci/run` sets it): then a
 /// missing system component fails the test instead of skipping it. Hidden
 /// components ([`optional_hidden`]) are never required.

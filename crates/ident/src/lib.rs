@@ -25,6 +25,7 @@
 
 #![warn(missing_docs)]
 
+pub mod covariance;
 pub mod csv_input;
 mod error;
 mod exact;
@@ -39,6 +40,7 @@ pub mod synth;
 pub mod uncertainty;
 pub mod units;
 
+pub use covariance::FitCovariance;
 pub use csv_input::{
     UnitOverrides, parse_frf_csv, parse_stribeck_csv, read_frf_csv, read_stribeck_csv,
 };

@@ -271,3 +271,61 @@ fn an_unconverged_fit_is_named() {
         report.not_identifiable
     );
 }
+
+/// `fit.json` carries the fit's joint uncertainty, and it agrees with the
+/// fit's other outputs: the covariance's diagonal is the square of each
+/// standard error, the SI matrix is the logarithmic one scaled by the
+/// values, and the replicates' spread is the jackknife covariance (the
+/// identity `(G-1)/G sum_b d_b d_b^T` it was formed from, recomputed here
+/// from the written replicates). The paths name the chosen element.
+#[test]
+fn the_report_carries_the_joint_covariance_and_the_replicates() {
+    let (record, _) = RecordSynth::new(small_stage(), 0.25).generate().unwrap();
+    let fit = fit_record(&record, &RecordOptions::default(), &mut |_| true).unwrap();
+    let report = fistage_ident::record::RecordReport::new(&record, &fit).for_element("rail_1");
+    let text = serde_json::to_string(&report).unwrap();
+    let read: fistage_ident::record::RecordReport = serde_json::from_str(&text).unwrap();
+    let covariance = read.covariance.clone().expect("a covariance");
+    covariance.check().unwrap();
+    let p = covariance.len();
+    assert_eq!(p, fit.free.len());
+    for (k, name) in covariance.parameters.iter().enumerate() {
+        let param = read
+            .params()
+            .into_iter()
+            .find(|(n, _)| n == name)
+            .unwrap()
+            .1;
+        let se = param.std_error.expect("a standard error");
+        let diagonal = covariance.matrix[k][k].sqrt();
+        assert!(
+            (diagonal / se - 1.0).abs() < 1e-9,
+            "{name}: sqrt(diag) {diagonal:e} against std_error {se:e}"
+        );
+        assert_eq!(covariance.values[k], param.value);
+        let expected = (name != "mass").then(|| format!("overrides.rail_1.{name}"));
+        assert_eq!(covariance.paths[k], expected);
+        for j in 0..p {
+            let scaled = covariance.values[k] * covariance.log_matrix[k][j] * covariance.values[j];
+            assert!((covariance.matrix[k][j] - scaled).abs() <= 1e-12 * scaled.abs().max(1e-300));
+        }
+    }
+    let g = read.replicates.len();
+    assert_eq!(g, fit.blocks, "one replicate per block");
+    for i in 0..p {
+        for j in 0..p {
+            let sum: f64 = read
+                .replicates
+                .iter()
+                .map(|r| (r[i] / covariance.values[i]).ln() * (r[j] / covariance.values[j]).ln())
+                .sum();
+            let from_replicates = sum * (g as f64 - 1.0) / g as f64;
+            let written = covariance.log_matrix[i][j];
+            assert!(
+                (from_replicates - written).abs()
+                    <= 1e-9 * (covariance.log_matrix[i][i] * covariance.log_matrix[j][j]).sqrt(),
+                "[{i}][{j}]: {from_replicates:e} from the replicates, {written:e} written"
+            );
+        }
+    }
+}

@@ -24,7 +24,9 @@
 //! sd = 0.05
 //! ```
 //!
-//! See [`distribution`] for the distributions and their keys. Every sample
+//! See [`distribution`] for the distributions and their keys, and
+//! [`from_fit`] for drawing an identified stage from its fit (`from_fit =
+//! "fit.json"`, alone or with parameter entries). Every sample
 //! is a function of (seed, index) alone ([`sampling`]), so shards compute
 //! the samples a single run would. The binomial interval is exact in its
 //! coverage for plain Monte Carlo (`random`); for the scrambled and
@@ -32,6 +34,7 @@
 //! the smooth boundaries of these studies).
 
 pub mod distribution;
+pub mod from_fit;
 pub mod sampling;
 pub mod statistics;
 mod study;
@@ -43,6 +46,7 @@ use fistage_model::{LoadError, Loaded, Parameter, RobotSpec, Scenario};
 use serde::Serialize;
 
 pub use distribution::Distribution;
+pub use from_fit::FittedDraw;
 pub use sampling::{Design, Sampling};
 pub use statistics::{Probability, quantile, spearman};
 pub use study::RobustStudy;
@@ -86,6 +90,9 @@ pub struct RobustSpec {
     pub assessment: Assessment,
     /// The design's dimensions.
     pub dimensions: Vec<Dimension>,
+    /// The parameters drawn jointly from a fit (`from_fit`), after the
+    /// dimensions.
+    pub fitted: Option<FittedDraw>,
     design: Design,
 }
 
@@ -152,10 +159,10 @@ impl RobustSpec {
                 format!("must be from 1 to {MAX_SAMPLES}, got {samples}"),
             ));
         }
-        if raw.parameters.is_empty() {
+        if raw.parameters.is_empty() && raw.from_fit.is_none() {
             return Err(scenario.error(
                 "robust.parameter",
-                "no [[robust.parameter]]: nothing is toleranced",
+                "no [[robust.parameter]] and no from_fit: nothing is toleranced",
             ));
         }
         let assessment = Assessment {
@@ -192,8 +199,29 @@ impl RobustSpec {
                 }));
             }
         }
+        let fitted = match &raw.from_fit {
+            Some(file) => Some(FittedDraw::read(file, raw.from_fit_draw, scenario, robot)?),
+            None => None,
+        };
+        if let Some(fitted) = &fitted
+            && let Some(both) = fitted.targets.iter().find(|t| {
+                dimensions
+                    .iter()
+                    .flat_map(|d| &d.targets)
+                    .any(|d| d.path == t.path)
+            })
+        {
+            return Err(scenario.error(
+                "robust.from_fit",
+                format!(
+                    "\"{}\" is drawn from the fit and toleranced by a [[robust.parameter]] too",
+                    both.path
+                ),
+            ));
+        }
         let seed = seed.unwrap_or(raw.seed);
-        let design = Design::new(raw.sampling, seed, samples, dimensions.len())
+        let count = dimensions.len() + fitted.as_ref().map_or(0, FittedDraw::dimensions);
+        let design = Design::new(raw.sampling, seed, samples, count)
             .map_err(|why| scenario.error("robust.sampling", why))?;
         Ok(Self {
             samples,
@@ -201,23 +229,35 @@ impl RobustSpec {
             sampling: raw.sampling,
             assessment,
             dimensions,
+            fitted,
             design,
         })
     }
 
     /// The drawn parameters, one column each, in design order.
     pub fn columns(&self) -> Vec<&Target> {
-        self.dimensions.iter().flat_map(|d| &d.targets).collect()
+        let fitted = self.fitted.iter().flat_map(|f| &f.targets);
+        self.dimensions
+            .iter()
+            .flat_map(|d| &d.targets)
+            .chain(fitted)
+            .collect()
     }
 
     /// The parameter values of sample `index`, one per column.
     pub fn values(&self, index: usize) -> Vec<f64> {
         let u = self.design.point(index);
-        self.dimensions
+        let (independent, joint) = u.split_at(self.dimensions.len());
+        let mut values: Vec<f64> = self
+            .dimensions
             .iter()
-            .zip(u)
-            .flat_map(|(d, u)| d.targets.iter().map(move |t| t.distribution.quantile(u)))
-            .collect()
+            .zip(independent)
+            .flat_map(|(d, &u)| d.targets.iter().map(move |t| t.distribution.quantile(u)))
+            .collect();
+        if let Some(fitted) = &self.fitted {
+            values.extend(fitted.values(joint));
+        }
+        values
     }
 
     /// Evaluates sample `index` of the study `base` (whose robot file, as

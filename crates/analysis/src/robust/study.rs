@@ -29,7 +29,7 @@ impl RobustStudy<'_> {
         shard: Option<(usize, usize)>,
     ) -> Result<Provenance, StudyError> {
         let spec = self.spec;
-        Provenance::of_study(
+        let provenance = Provenance::of_study(
             "robust",
             (&self.loaded.scenario.file, scenario_text),
             &self.loaded.scenario.robot,
@@ -39,7 +39,14 @@ impl RobustStudy<'_> {
             ),
             &format!("{:?}", spec.assessment),
             shard,
-        )
+        )?;
+        // The fit drawn from is part of what decides the numbers.
+        match &spec.fitted {
+            Some(fitted) => Ok(provenance
+                .with_file("fit drawn from", &fitted.file)?
+                .with_item("fit draw", format!("{:?}", fitted.draw))),
+            None => Ok(provenance),
+        }
     }
 }
 

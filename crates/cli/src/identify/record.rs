@@ -188,7 +188,7 @@ pub fn run_record(args: &RecordArgs) -> Result<()> {
         true
     })?;
     bar.finish_and_clear();
-    let report = RecordReport::new(&record, &fit);
+    let report = RecordReport::new(&record, &fit).for_element(&args.output.element);
     let json = serde_json::to_string_pretty(&report)?;
     let verdict = refuse_undetermined(&args.output, &report.not_identifiable);
     if let (Some(target), true) = (&args.output.out, verdict.is_ok()) {

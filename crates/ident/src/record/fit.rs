@@ -131,6 +131,9 @@ pub struct RecordFit {
     /// Jacobian-only (independent residuals) standard errors of the free
     /// parameters, for comparison with the honest ones.
     pub iid_std_errors: Vec<Option<f64>>,
+    /// The joint uncertainty of the free parameters (the jackknife's), when
+    /// the information matrix could be inverted.
+    pub joint: Option<JointUncertainty>,
     /// The first estimates from the record.
     pub start: StartEstimate,
     /// The parameters the iterations started from (the best presliding variant).
@@ -167,6 +170,59 @@ impl RecordFit {
             .find(|(p, _)| *p == param)
             .map_or(Estimate::exact(self.theta.get(param)), |(_, e)| *e)
     }
+}
+
+/// The joint uncertainty of a fit's free parameters, in the fit's own
+/// space (logarithms of the parameters).
+#[derive(Debug, Clone, PartialEq)]
+pub struct JointUncertainty {
+    /// `Cov(ln theta)` of the free parameters, in [`RecordFit::free`] order
+    /// (the linearised delete-one-block jackknife).
+    pub log_covariance: DMatrix<f64>,
+    /// Per block left out, `ln theta_(b) - ln theta`: how far the estimate
+    /// moves without that block (the jackknife's replicates).
+    pub log_replicates: Vec<DVector<f64>>,
+    /// Degrees of freedom of the intervals (blocks - 1).
+    pub degrees_of_freedom: usize,
+}
+
+impl RecordFit {
+    /// `Cov(theta)` of the free parameters in SI units (first order:
+    /// `diag(theta) Cov(ln theta) diag(theta)`).
+    pub fn covariance(&self) -> Option<DMatrix<f64>> {
+        let joint = self.joint.as_ref()?;
+        let values: Vec<f64> = self.free.iter().map(|&p| self.theta.get(p)).collect();
+        Some(DMatrix::from_fn(values.len(), values.len(), |i, j| {
+            values[i] * joint.log_covariance[(i, j)] * values[j]
+        }))
+    }
+
+    /// The jackknife replicates of the free parameters in SI units: the
+    /// estimate with each block left out, `theta * exp(d_b)`.
+    pub fn replicates(&self) -> Vec<Vec<f64>> {
+        let Some(joint) = self.joint.as_ref() else {
+            return Vec::new();
+        };
+        joint
+            .log_replicates
+            .iter()
+            .map(|d| {
+                self.free
+                    .iter()
+                    .enumerate()
+                    .map(|(j, &p)| self.theta.get(p) * d[j].exp())
+                    .collect()
+            })
+            .collect()
+    }
+}
+
+/// What the jackknife gives: every parameter's estimate, the Jacobian-only
+/// standard errors of the free ones, and their joint uncertainty.
+struct Intervals {
+    estimates: Vec<(RecordParam, Estimate)>,
+    iid: Vec<Option<f64>>,
+    joint: Option<JointUncertainty>,
 }
 
 /// The misfit of one simulation.
@@ -312,7 +368,11 @@ pub fn fit_record(
         Some(_) => equal_blocks(record, BLOCK_DURATION),
         None => residual_blocks(&segments, record.len()),
     };
-    let (estimates, iid) = problem.intervals(&outcome, &block_ranges, known_mass);
+    let Intervals {
+        estimates,
+        iid,
+        joint,
+    } = problem.intervals(&outcome, &block_ranges, known_mass);
     let bounds = std::array::from_fn(|i| {
         let (center, spread) = (problem.center.0[i], problem.spread[i]);
         (center / spread, center * spread)
@@ -324,6 +384,7 @@ pub fn fit_record(
         free,
         estimates,
         iid_std_errors: iid,
+        joint,
         start,
         refined_start,
         bounds,
@@ -604,14 +665,14 @@ impl Problem<'_> {
         out
     }
 
-    /// Block-jackknife estimates of every parameter, and the Jacobian-only
-    /// standard errors of the free ones.
+    /// Block-jackknife estimates of every parameter, the Jacobian-only
+    /// standard errors of the free ones, and their joint uncertainty.
     fn intervals(
         &self,
         outcome: &Outcome,
         block_ranges: &[(usize, usize)],
         known_mass: Option<f64>,
-    ) -> (Vec<(RecordParam, Estimate)>, Vec<Option<f64>>) {
+    ) -> Intervals {
         let p = self.free.len();
         let threshold = if self.loss == Loss::Huber {
             1.345 * mad_scale(&outcome.misfit.residual).max(1e-300)
@@ -643,15 +704,22 @@ impl Problem<'_> {
         let inverse = scaled_inverse(&h);
         // Delete-one-block jackknife, linearised: leaving block b out moves
         // the estimate by (H - H_b)^-1 g_b.
-        let jackknife = inverse.as_ref().map(|hi| {
+        let replicates: Option<Vec<DVector<f64>>> = inverse.as_ref().map(|hi| {
+            blocks
+                .iter()
+                .map(|(score, info)| {
+                    let without = &h - info;
+                    without
+                        .cholesky()
+                        .map(|c| c.solve(score))
+                        .unwrap_or_else(|| hi * score)
+                })
+                .collect()
+        });
+        let jackknife = replicates.as_ref().map(|deltas| {
             let mut cov = DMatrix::<f64>::zeros(p, p);
-            for (score, info) in &blocks {
-                let without = &h - info;
-                let delta = without
-                    .cholesky()
-                    .map(|c| c.solve(score))
-                    .unwrap_or_else(|| hi * score);
-                cov += &delta * delta.transpose();
+            for delta in deltas {
+                cov += delta * delta.transpose();
             }
             cov * ((g - 1.0) / g)
         });
@@ -680,7 +748,19 @@ impl Problem<'_> {
             );
             estimates.push((param, Estimate::new(value, se, t, 0.0)));
         }
-        (estimates, iid)
+        let joint = jackknife
+            .zip(replicates)
+            .filter(|(c, _)| c.iter().all(|v| v.is_finite()))
+            .map(|(log_covariance, log_replicates)| JointUncertainty {
+                log_covariance,
+                log_replicates,
+                degrees_of_freedom: block_ranges.len().saturating_sub(1),
+            });
+        Intervals {
+            estimates,
+            iid,
+            joint,
+        }
     }
 }
 

@@ -40,7 +40,9 @@ pub mod start;
 pub mod synth;
 
 pub use data::{Record, StartState};
-pub use fit::{FitProgress, MassChoice, RecordFit, RecordOptions, SegmentChoice, fit_record};
+pub use fit::{
+    FitProgress, JointUncertainty, MassChoice, RecordFit, RecordOptions, SegmentChoice, fit_record,
+};
 pub use plant::{RecordParam, Theta};
 pub use read::{parse_record_mat, read_record};
 pub use report::{RecordReport, record_fit_csv, record_override};

@@ -11,7 +11,10 @@ use serde::{Deserialize, Serialize};
 use super::data::Record;
 use super::fit::RecordFit;
 use super::plant::RecordParam;
-use crate::report::{NotIdentifiable, ParamReport, comment, sig, undetermined, write_override};
+use crate::covariance::FitCovariance;
+use crate::report::{
+    DEFAULT_ELEMENT, NotIdentifiable, ParamReport, comment, sig, undetermined, write_override,
+};
 use crate::stribeck::Loss;
 use crate::uncertainty::ResidualStats;
 
@@ -68,6 +71,13 @@ pub struct RecordReport {
     pub not_identifiable: Vec<NotIdentifiable>,
     /// Things the user should know about this fit.
     pub warnings: Vec<String>,
+    /// The joint covariance of the fitted parameters, when the fit has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub covariance: Option<FitCovariance>,
+    /// The jackknife's replicates: per block of the record left out, the
+    /// fitted parameters (in `covariance.parameters` order, SI units).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub replicates: Vec<Vec<f64>>,
 }
 
 impl RecordReport {
@@ -166,7 +176,22 @@ impl RecordReport {
             rhs_evaluations: fit.rhs_evaluations,
             not_identifiable,
             warnings,
+            covariance: covariance_of(fit, DEFAULT_ELEMENT),
+            replicates: fit.replicates(),
         }
+    }
+
+    /// The report with the parameter paths of the friction element
+    /// `element` (the one `override.toml` writes).
+    pub fn for_element(mut self, element: &str) -> Self {
+        if let Some(covariance) = &mut self.covariance {
+            covariance.paths = covariance
+                .parameters
+                .iter()
+                .map(|name| path_of(name, element))
+                .collect();
+        }
+        self
     }
 
     /// The parameters in the order of [`RecordParam::ALL`].
@@ -233,6 +258,35 @@ impl RecordReport {
         }
         out
     }
+}
+
+/// The parameter-table path of a record parameter of the friction element
+/// `element`: the six LuGre ones; the moving mass has none.
+fn path_of(name: &str, element: &str) -> Option<String> {
+    (name != RecordParam::Mass.name()).then(|| format!("overrides.{element}.{name}"))
+}
+
+/// The fit's joint covariance as `fit.json` carries it.
+fn covariance_of(fit: &RecordFit, element: &str) -> Option<FitCovariance> {
+    let joint = fit.joint.as_ref()?;
+    let matrix = fit.covariance()?;
+    let rows = |m: &nalgebra::DMatrix<f64>| -> Vec<Vec<f64>> {
+        m.row_iter().map(|r| r.iter().copied().collect()).collect()
+    };
+    let parameters: Vec<String> = fit.free.iter().map(|p| p.name().to_string()).collect();
+    Some(FitCovariance {
+        paths: parameters.iter().map(|n| path_of(n, element)).collect(),
+        values: fit.free.iter().map(|&p| fit.theta.get(p)).collect(),
+        matrix: rows(&matrix),
+        log_matrix: rows(&joint.log_covariance),
+        method: format!(
+            "linearised delete-one-block jackknife over {} blocks, in ln(theta); \
+             matrix = diag(theta) log_matrix diag(theta)",
+            fit.blocks
+        ),
+        degrees_of_freedom: joint.degrees_of_freedom,
+        parameters,
+    })
 }
 
 /// The six LuGre parameters as `[overrides.<element>]` (the mass is a

@@ -129,6 +129,43 @@ pub struct RobustTable {
     /// The `[[robust.parameter]]` entries, in file order.
     #[serde(rename = "parameter", default)]
     pub parameters: Vec<ParameterTable>,
+    /// A fit's `fit.json` (relative to the scenario file) whose fitted
+    /// parameters are drawn jointly, with the fit's covariance.
+    pub from_fit: Option<std::path::PathBuf>,
+    /// How `from_fit` is drawn (default: normal).
+    #[serde(default)]
+    pub from_fit_draw: FitDraw,
+}
+
+impl Default for RobustTable {
+    /// The table with every default and nothing toleranced.
+    fn default() -> Self {
+        Self {
+            samples: default_samples(),
+            seed: 0,
+            analysis: linear(),
+            sampling: sobol(),
+            duration: None,
+            oscillation_threshold: default_threshold(),
+            parameters: Vec::new(),
+            from_fit: None,
+            from_fit_draw: FitDraw::default(),
+        }
+    }
+}
+
+/// How `[robust] from_fit` draws a fit's parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FitDraw {
+    /// Multivariate normal about the fitted values with the fit's
+    /// covariance (SI units).
+    #[default]
+    Normal,
+    /// The jackknife's replicates themselves, each drawn with equal
+    /// probability and spread about the fit by sqrt(blocks - 1) in the
+    /// logarithms, so that their covariance is the fit's.
+    Replicates,
 }
 
 /// A `[[robust.parameter]]` entry: which parameter (`*` within element
