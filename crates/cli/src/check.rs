@@ -20,6 +20,9 @@ pub struct CheckArgs {
 /// Runs the command.
 pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     let loaded = fistage_model::load(&args.scenario)?;
+    for note in loaded.model.notes() {
+        eprintln!("warning: {}: {note}", args.scenario.display());
+    }
     fistage_sim::validate(&loaded)?;
     let model = &loaded.model;
     println!("{}: ok", args.scenario.display());

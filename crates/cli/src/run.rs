@@ -48,6 +48,9 @@ pub struct RunArgs {
 /// Runs the command.
 pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     let mut loaded = fistage_model::load(&args.scenario)?;
+    for note in loaded.model.notes() {
+        eprintln!("warning: {}: {note}", args.scenario.display());
+    }
     if let Some(rtol) = args.rtol {
         fistage_model::SolverSettings::check_rtol(rtol)
             .map_err(|why| anyhow::anyhow!("--rtol {why}"))?;

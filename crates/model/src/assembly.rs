@@ -103,6 +103,8 @@ struct Assembler<'a> {
     names: Vec<String>,
     kinds: Vec<StateKind>,
     nominal: Vec<f64>,
+    /// What a reader should know about a legal but odd study.
+    notes: Vec<String>,
 }
 
 impl<'a> Assembler<'a> {
@@ -115,6 +117,7 @@ impl<'a> Assembler<'a> {
             names: Vec::new(),
             kinds: Vec::new(),
             nominal: Vec::new(),
+            notes: Vec::new(),
         };
         assembler.walk_tree()?;
         Ok(assembler)
@@ -415,7 +418,8 @@ impl<'a> Assembler<'a> {
         frictions: &[FrictionContact],
         isolators: &[Isolator],
     ) -> Result<Feedforward, LoadError> {
-        let mut model = settings.bearing_model(robot, &scenario.file)?;
+        let (mut model, notes) = settings.bearing_model(robot, &scenario.file)?;
+        self.notes.extend(notes);
         let contact =
             (settings.element.as_ref()).and_then(|name| frictions.iter().find(|f| &f.name == name));
         let carried = contact.and_then(|contact| {
@@ -685,6 +689,7 @@ impl<'a> Assembler<'a> {
             evaluator,
             robot: robot.clone(),
             machine_code: Default::default(),
+            notes: std::mem::take(&mut self.notes),
         })
     }
 }

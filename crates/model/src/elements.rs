@@ -476,12 +476,41 @@ impl FrictionModel {
     /// The first parameter that breaks a rule: (name, what it must be).
     pub fn validate(&self) -> Result<(), (&'static str, String)> {
         match self {
-            Self::Lugre(p) => p.validate().map_err(|e| {
-                let message = e.to_string();
-                let tail = message.strip_prefix(e.name).unwrap_or(&message).trim();
-                (e.name, tail.to_string())
-            }),
+            Self::Lugre(p) => p.validate().map_err(fault),
             Self::Dahl(p) => p.validate(),
+        }
+    }
+
+    /// Checks what makes the model's law defined, each key's own rule (a
+    /// LuGre model's `f_s` may lie below its `f_c`: see
+    /// [`LugreParams::validate_each`]); else the first key at fault and why.
+    pub fn validate_law(&self) -> Result<(), (&'static str, String)> {
+        match self {
+            Self::Lugre(p) => p.validate_each().map_err(fault),
+            Self::Dahl(p) => p.validate(),
+        }
+    }
+
+    /// What is physically odd about a model whose law is defined, one
+    /// sentence each: a LuGre model with f_s below f_c (a friction level
+    /// that rises with speed).
+    pub fn oddities(&self) -> Vec<String> {
+        match self {
+            Self::Lugre(p) if p.f_s < p.f_c => {
+                // Six significant digits: the errors' products are not round.
+                let round = |v: f64| {
+                    let scale = 10f64.powi(5 - v.abs().log10().floor() as i32);
+                    crate::rule::show((v * scale).round() / scale)
+                };
+                vec![format!(
+                    "the compensator's model has f_s = {} N below f_c = {} N: its Stribeck \
+                     curve rises with speed, which no bearing does (the law stays defined: \
+                     g >= f_s > 0)",
+                    round(p.f_s),
+                    round(p.f_c)
+                )]
+            }
+            _ => Vec::new(),
         }
     }
 
@@ -585,4 +614,11 @@ pub struct Observer {
     pub cutoff: f64,
     /// Index of the observer state eta in the state vector.
     pub state_index: usize,
+}
+
+/// A LuGre parameter's fault as (name, what it must be).
+fn fault(e: crate::lugre::InvalidLugreParameter) -> (&'static str, String) {
+    let message = e.to_string();
+    let tail = message.strip_prefix(e.name).unwrap_or(&message).trim();
+    (e.name, tail.to_string())
 }

@@ -33,12 +33,21 @@ pub struct Model {
     /// each compiled when [`Model::compile_with`] is first called for it
     /// (shared by the model's clones).
     pub(crate) machine_code: Arc<[OnceLock<Compiled>; 2]>,
+    /// What a reader should know about this legal but odd study (a
+    /// compensator's model with f_s below f_c, say).
+    pub(crate) notes: Vec<String>,
 }
 
 impl Model {
     /// Robot name.
     pub fn name(&self) -> &str {
         &self.name
+    }
+
+    /// What a reader should know about this legal but odd study, one
+    /// sentence each (the program prints them as warnings).
+    pub fn notes(&self) -> &[String] {
+        &self.notes
     }
 
     /// Moving bodies, parents before children.

@@ -457,25 +457,29 @@ impl CompensationSettings {
     }
 
     /// The model the compensator simulates at the bearing: the stated model
-    /// with its relative errors applied, checked.
+    /// with its relative errors applied, checked by what makes the
+    /// compensator's law defined (each key's own rule), not by a friction
+    /// element's ordering: a study of an overestimated Coulomb level is
+    /// legal. With it, what is physically odd about the model, one sentence
+    /// each (f_s below f_c).
     pub fn bearing_model(
         &self,
         robot: &RobotSpec,
         file: &std::path::Path,
-    ) -> Result<FrictionModel, LoadError> {
+    ) -> Result<(FrictionModel, Vec<String>), LoadError> {
         let mut model = self.stated_model(robot, file)?;
         for (name, error) in &self.error {
             let value = model.get(name) * (1.0 + error);
             model.set(name, value);
         }
-        model.validate().map_err(|(key, message)| {
+        model.validate_law().map_err(|(key, message)| {
             LoadError::scenario(
                 file,
                 "compensation",
                 format!("the compensator's model breaks a rule after its errors: {key} {message}"),
             )
         })?;
-        Ok(model)
+        Ok((model, model.oddities()))
     }
 }
 
