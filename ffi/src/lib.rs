@@ -13,6 +13,13 @@
 //!   instances and share their call bodies);
 //! - [`package`]: building the `.fmu` archive ([`FmiVersion`] picks the standard).
 //!
+//! Threads: instances are independent (each owns its model, state and FMU
+//! states; the library shares only the set of live instances, locked for the
+//! membership check alone), so different instances may be called from
+//! different threads at the same time; one instance is called from one
+//! thread at a time, as FMI requires. Every run is deterministic: an
+//! instance stepped beside others gives, bit for bit, what it gives alone.
+//!
 //! An FMU is packed from a scenario and this crate's shared library (the
 //! `fistage fmu` command does it); in Rust an [`Instance`] is the unit
 //! itself, driven the way an importer drives it:

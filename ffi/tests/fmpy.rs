@@ -433,6 +433,31 @@ fn a_controller_fmu_closes_the_loop_through_a_multi_fmu_master() {
     );
 }
 
+/// Many instances at once: 64 instances of the Fig. 5b FMU, each with its
+/// own servo damping, stepped on eight threads together by the Python
+/// example `python/examples/fmu_parallel_instances.py` (FMPy), each equal bit
+/// for bit, at every step, to the same instance run alone; the dampings make
+/// 64 different trajectories.
+#[test]
+fn parallel_instances_equal_their_serial_runs_bit_for_bit() {
+    if !support::fmpy_available("parallel_instances_equal_their_serial_runs_bit_for_bit") {
+        return;
+    }
+    let folder = support::scratch("parallel_instances");
+    let fmu = support::fmu("scenarios/paper/fig05b_fi.toml", &folder);
+    let example = support::root().join("python/examples/fmu_parallel_instances.py");
+    let report: serde_json::Value = serde_json::from_str(&support::run_python_file(
+        &example,
+        &[fmu.to_str().unwrap_or_default(), "--json", "--stop", "0.2"],
+    ))
+    .expect("JSON");
+    assert_eq!(report["instances"], 64);
+    assert_eq!(report["threads"], 8);
+    assert_eq!(report["differing"], serde_json::json!([]), "{report}");
+    assert_eq!(report["serial"], report["parallel"]);
+    assert_eq!(report["distinct_trajectories"], 64);
+}
+
 #[test]
 fn rollback_repeats_the_trajectory_bit_for_bit() {
     if !support::fmpy_available("rollback_repeats_the_trajectory_bit_for_bit") {

@@ -107,14 +107,20 @@ pub fn fmu_version(scenario: &str, folder: &Path, version: fistage_fmi::FmiVersi
 
 /// Runs `ffi/tests/python/<script>` with arguments; returns its standard output.
 pub fn run_python(script: &str, args: &[&str]) -> String {
+    run_python_file(&root().join("ffi/tests/python").join(script), args)
+}
+
+/// [`run_python`] on any script of the repository (an example, say).
+pub fn run_python_file(script: &Path, args: &[&str]) -> String {
     let output = Command::new(python())
-        .arg(root().join("ffi/tests/python").join(script))
+        .arg(script)
         .args(args)
         .output()
         .expect("run python");
     assert!(
         output.status.success(),
-        "{script} failed:\n{}\n{}",
+        "{} failed:\n{}\n{}",
+        script.display(),
         String::from_utf8_lossy(&output.stdout),
         String::from_utf8_lossy(&output.stderr)
     );
