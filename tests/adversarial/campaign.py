@@ -1478,6 +1478,53 @@ def gen_robust(quick):
     for label, params, exp, needles in cases:
         m = re.search(r'parameter = "([^"]*)"', params)
         rb(label, robust_text(params=params), exp, needles + ([m.group(1)] if m and m.group(1) else []))
+    # from_fit: a fit's fit.json drawn jointly; damaged files are named, never drawn.
+    def fit_json(paths, values, matrix, extra=None):
+        doc = {"covariance": {"parameters": [q.rsplit(".", 1)[-1] for q in paths], "paths": paths,
+                              "values": values, "matrix": matrix,
+                              "log_matrix": [[v / (values[i] * values[j]) for j, v in enumerate(row)]
+                                             for i, row in enumerate(matrix)],
+                              "method": "campaign", "degrees_of_freedom": 3},
+               "not_identifiable": []}
+        doc.update(extra or {})
+        return write(fresh("robust/fit", ".json"), json.dumps(doc))
+
+    good_fit = (["overrides.bearing_friction.sigma0", "controller.c"], [2.2e6, 100.0],
+                [[1e10, 1e3], [1e3, 25.0]])
+
+    def from_fit(path, draw=None, params=""):
+        head = ROBUST_HEAD + "from_fit = %s\n" % tq(path)
+        if draw is not None:
+            head += "from_fit_draw = %s\n" % draw
+        return robust_text(head, params=params)
+
+    rb("from_fit alone", from_fit(fit_json(*good_fit)), "accept", [])
+    rb("from_fit with a parameter", from_fit(fit_json(*good_fit), params=rparam(
+        "overrides.isolator.k_x", "uniform", half_width="0.3")), "accept", [])
+    replicates = {"replicates": [[2.1e6, 95.0], [2.3e6, 104.0], [2.2e6, 99.0], [2.25e6, 101.0]]}
+    rb("from_fit replicates", from_fit(fit_json(*good_fit, extra=replicates), '"replicates"'), "accept", [])
+    rb("from_fit replicates missing", from_fit(fit_json(*good_fit), '"replicates"'), "refuse",
+       ["replicates", "fit"])
+    rb("from_fit draw unknown", from_fit(fit_json(*good_fit), '"bootstrap"'), "refuse", ["from_fit_draw"])
+    rb("from_fit missing file", from_fit(os.path.join(SCRATCH, "robust", "no_such_fit.json")), "refuse",
+       ["no_such_fit.json"])
+    rb("from_fit not JSON", from_fit(write(fresh("robust/fit", ".json"), "not json")), "refuse",
+       ["from_fit", ".json"])
+    rb("from_fit no covariance", from_fit(write(fresh("robust/fit", ".json"), "{}")), "refuse",
+       ["covariance"])
+    rb("from_fit path naming nothing", from_fit(fit_json(["overrides.nope.sigma0", "controller.c"],
+                                                         *good_fit[1:])), "refuse", ["covariance.paths[0]"])
+    rb("from_fit matrix 1 x 1 for 2", from_fit(fit_json(good_fit[0], good_fit[1], [[1e10]])), "refuse",
+       ["covariance.matrix"])
+    rb("from_fit negative eigenvalue", from_fit(fit_json(good_fit[0], good_fit[1], [[1e10, 1e6], [1e6, 25.0]])),
+       "refuse", ["negative eigenvalue"])
+    rb("from_fit NaN value", from_fit(fit_json(good_fit[0], [float("nan"), 100.0], good_fit[2])), "refuse",
+       ["from_fit", "fit"])
+    undetermined = {"not_identifiable": [{"parameter": "c", "reason": "no interval"}]}
+    rb("from_fit undetermined parameter", from_fit(fit_json(*good_fit, extra=undetermined)), "refuse",
+       ["c was not determined"])
+    rb("from_fit and the same parameter", from_fit(fit_json(*good_fit), params=rparam(
+        "controller.c", "normal", sd="0.1")), "refuse", ["controller.c", "too"])
     for flag, vals in [("--samples", ["0", "-1", "nan", "abc", "1e3", "18446744073709551616"]),
                        ("--seed", ["-1", "nan", "abc", "18446744073709551616"]),
                        ("--threads", ["0", "-1", "abc"]), ("--shard", ["2/2", "1/0", "abc"])]:
