@@ -41,6 +41,9 @@ fn scenario_setting(text: &str, parameter: &Parameter, value: f64) -> String {
     let (tables, key) = match path.as_slice() {
         ["controller", key] => (vec!["controller"], *key),
         ["overrides", element, key] => (vec!["overrides", *element], *key),
+        ["compensation", "error", key] => (vec!["compensation", "error"], *key),
+        ["compensation", key] => (vec!["compensation"], *key),
+        ["dob", key] => (vec!["dob"], *key),
         _ => panic!("{parameter} is not a scenario key"),
     };
     let mut place = &mut table;
@@ -133,4 +136,12 @@ fn every_fmi_parameter_walks_from_file_and_importer_into_the_model() {
     // fig05b: 3 gains, 6 LuGre, 12 isolator; four bearings: 3 + 4 * 6 + 4 * 12.
     assert_eq!(one_dof, 3 + 6 + 12);
     assert_eq!(four_bearing, 3 + 4 * 6 + 4 * 12);
+    // The compensator's model and its errors, and the observer, are FMU
+    // parameters too: the LuGre feedforward of Fig. 3a (6 values, 6 errors)
+    // and the observer of Fig. 3b (bandwidth, nominal mass).
+    let compensated = walk("scenarios/paper/fig03a_lugre_fi.toml");
+    let observed = walk("scenarios/paper/fig03b_dob_fi.toml");
+    println!("walked {compensated} and {observed} parameters with compensation");
+    assert_eq!(compensated, 3 + 6 + 12 + 6 + 6);
+    assert_eq!(observed, 3 + 6 + 12 + 2);
 }

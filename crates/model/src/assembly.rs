@@ -690,6 +690,8 @@ impl<'a> Assembler<'a> {
             robot: robot.clone(),
             machine_code: Default::default(),
             notes: std::mem::take(&mut self.notes),
+            compensation: scenario.compensation.clone(),
+            observer: scenario.observer,
         })
     }
 }

@@ -36,6 +36,10 @@ pub struct Model {
     /// What a reader should know about this legal but odd study (a
     /// compensator's model with f_s below f_c, say).
     pub(crate) notes: Vec<String>,
+    /// The scenario's `[compensation]` and `[dob]` as written (the
+    /// parameter table reads the compensator's and observer's values here).
+    pub(crate) compensation: Option<crate::compensation::CompensationSettings>,
+    pub(crate) observer: Option<crate::compensation::ObserverSettings>,
 }
 
 impl Model {

@@ -20,8 +20,8 @@
 //! | `overrides.<isolator>.x` (`y`, `z`) | m | finite | attach point |
 //! | `overrides.<actuator or sensor>.x` (`y`, `z`) | m | finite | point |
 //! | `overrides.<link>.mass` | kg | > 0 | link mass (inertia scales with it) |
-//! | `compensation.<model key>` | SI | the model's | a feedforward compensator's model parameter (`sigma0` .. `v_s`; Dahl: `sigma`, `f_c`, `exponent`) |
-//! | `compensation.error.<model key>` | 1 | > -1 | relative error on that parameter |
+//! | `compensation.<model key>` | SI | the model's | a feedforward compensator's model parameter (`sigma0` .. `v_s`; Dahl: `sigma`, `f_c`, `exponent`); also `compensation.<element>.<model key>` |
+//! | `compensation.error.<model key>` | 1 | > -1 | relative error on that parameter; also `compensation.<element>.error.<model key>` |
 //! | `dob.bandwidth`, `dob.nominal_mass` | Hz, kg | > 0 | disturbance observer |
 //! | `reference.<number key>` | SI | the key's | a number of `[reference]` (e.g. `tangential_velocity`, `step`) |
 //!
@@ -266,7 +266,12 @@ impl Parameter {
     pub fn is_fmi_variable(&self) -> bool {
         matches!(
             self.target,
-            Target::Gain(_) | Target::Lugre(..) | Target::Isolator(..)
+            Target::Gain(_)
+                | Target::Lugre(..)
+                | Target::Isolator(..)
+                | Target::Compensation(_)
+                | Target::CompensationError(_)
+                | Target::Observer(_)
         )
     }
 
@@ -351,9 +356,10 @@ impl Parameter {
         }
     }
 
-    /// The value in an assembled model, where the model holds it: servo gains
-    /// and robot-file values (after overrides). `None` for the platform
-    /// velocity (an input, not part of a model) and for relative parameters.
+    /// The value in an assembled model, where the model holds it: servo gains,
+    /// robot-file values (after overrides), the compensator's and observer's
+    /// values. `None` for the platform velocity (an input, not part of a
+    /// model), the reference and the factors and spreads.
     pub fn read_model(&self, model: &Model) -> Option<f64> {
         match self.target {
             Target::Gain(gain) => model.structure.controller.as_ref().map(|c| match gain {
@@ -361,13 +367,17 @@ impl Parameter {
                 Gain::C => c.c,
                 Gain::KI => c.k_i,
             }),
+            Target::Compensation(key) => (model.compensation.as_ref())
+                .and_then(|c| c.stated_model(model.robot(), std::path::Path::new("")).ok())
+                .map(|stated| stated.get(key.name)),
+            Target::CompensationError(key) => {
+                (model.compensation.as_ref()).map(|c| c.error.get(key.name).copied().unwrap_or(0.0))
+            }
+            Target::Observer(key) => model.observer.map(|o| o.get(key)),
             Target::PlatformVelocity
             | Target::Alpha
             | Target::Beta
             | Target::Spread(_)
-            | Target::Compensation(_)
-            | Target::CompensationError(_)
-            | Target::Observer(_)
             | Target::Reference(_) => None,
             _ => Some(self.read_robot(model.robot())),
         }
@@ -600,6 +610,13 @@ fn compensation_target(rest: &str, scenario: &Scenario) -> Result<Target, String
         return Err("the scenario has no [compensation] (or its kind is none)".into());
     };
     let kind: CompensationKind = compensation.kind;
+    // `compensation.<element>.<key>`: the element the compensator models
+    // may be named, as a study of several compensators would.
+    let rest = compensation
+        .element
+        .as_deref()
+        .and_then(|element| rest.strip_prefix(element)?.strip_prefix('.'))
+        .unwrap_or(rest);
     let (name, relative) = match rest.strip_prefix("error.") {
         Some(name) => (name, true),
         None => (rest, false),

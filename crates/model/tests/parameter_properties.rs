@@ -71,3 +71,34 @@ proptest! {
         prop_assert_eq!(again.unit(), parameter.unit());
     }
 }
+
+/// A compensator's parameters may name the element it models:
+/// `compensation.<element>.<key>` and `compensation.<element>.error.<key>`
+/// reach what `compensation.<key>` and `compensation.error.<key>` reach; an
+/// element it does not model names nothing.
+#[test]
+fn compensation_paths_may_name_the_modelled_element() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let mut scenario =
+        Scenario::from_file(&root.join("scenarios/paper/fig03a_lugre_fi.toml")).expect("scenario");
+    let mut robot = RobotSpec::from_file(&scenario.robot).expect("robot");
+    for (named, plain, value) in [
+        ("compensation.bearing_friction.f_c", "compensation.f_c", 6.0),
+        (
+            "compensation.bearing_friction.error.sigma0",
+            "compensation.error.sigma0",
+            0.3,
+        ),
+    ] {
+        let named = Parameter::resolve(named, &scenario, &robot).expect("the element's path");
+        let plain = Parameter::resolve(plain, &scenario, &robot).expect("the plain path");
+        named
+            .write(&mut scenario, &mut robot, value)
+            .expect("admissible");
+        assert_eq!(plain.read(&scenario, &robot), value, "{named}");
+        assert_eq!(named.unit(), plain.unit());
+    }
+    let error = Parameter::resolve("compensation.table_friction.f_c", &scenario, &robot)
+        .expect_err("names nothing");
+    assert!(error.to_string().contains("table_friction"), "{error}");
+}
