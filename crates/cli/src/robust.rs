@@ -41,6 +41,13 @@ pub fn run(args: &RobustArgs) -> anyhow::Result<()> {
     let loaded = fistage_model::load(&args.scenario)?;
     let robot_file = RobotSpec::from_file(&loaded.scenario.robot)?;
     let spec = RobustSpec::from_scenario(&loaded.scenario, &robot_file, args.samples, args.seed)?;
+    if let Some(stages) = spec.fitted.as_ref().and_then(|f| f.distinct_stages()) {
+        eprintln!(
+            "warning: {}: from_fit_draw = \"replicates\" draws {stages} distinct stages (the fit's \
+             replicates): P is resolved no finer than 1/{stages}, whatever the samples",
+            args.scenario.display()
+        );
+    }
     let out_dir = args
         .out
         .clone()

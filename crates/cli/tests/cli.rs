@@ -1507,6 +1507,88 @@ fn a_population_is_drawn_from_a_record_fit() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// The shipped identified stage (`scenarios/robust/identified_rigid_population.toml`,
+/// its fit from a disturbed record): drawn jointly from the fit, P(unstable)
+/// at a damping 3% above the fitted stage's boundary lies far below what the
+/// same marginals drawn independently give, because the fit's f_c and
+/// sigma2 (and f_s, sigma0, sigma1) are strongly correlated; the two 95%
+/// intervals do not overlap.
+#[test]
+fn a_fitted_stage_drawn_jointly_differs_from_its_marginals() {
+    let dir = scratch("identified");
+    std::fs::create_dir_all(&dir).expect("scratch");
+    let shipped = repository().join("scenarios/robust/identified_rigid_population.toml");
+    let p_unstable = |scenario: &Path, out: &str| -> [f64; 3] {
+        let out = dir.join(out);
+        succeeds(&[
+            "robust".as_ref(),
+            scenario.as_os_str(),
+            "--out".as_ref(),
+            out.as_os_str(),
+        ]);
+        let summary: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(out.join("summary.json")).expect("summary"),
+        )
+        .expect("JSON");
+        let p = &summary["p_unstable_linear"];
+        let value = |v: &serde_json::Value| v.as_f64().expect("a number");
+        [
+            value(&p["estimate"]),
+            value(&p["ci95"][0]),
+            value(&p["ci95"][1]),
+        ]
+    };
+    let joint = p_unstable(&shipped, "joint");
+    // The same stage with each fitted parameter drawn alone (log-normal with
+    // the fit's relative standard error).
+    let fit: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(repository().join("scenarios/identify/rigid_record_fit.json"))
+            .expect("fit"),
+    )
+    .expect("JSON");
+    let covariance = &fit["covariance"];
+    let mut text = std::fs::read_to_string(&shipped)
+        .expect("scenario")
+        .replace(
+            "robot = \"../../robots",
+            &format!("robot = \"{}/robots", repository().display()),
+        )
+        .lines()
+        .filter(|l| !l.starts_with("from_fit"))
+        .collect::<Vec<_>>()
+        .join("\n");
+    for (k, path) in covariance["paths"]
+        .as_array()
+        .expect("paths")
+        .iter()
+        .enumerate()
+    {
+        let Some(path) = path.as_str() else { continue };
+        let value = covariance["values"][k].as_f64().expect("value");
+        let sd = covariance["matrix"][k][k]
+            .as_f64()
+            .expect("variance")
+            .sqrt();
+        text += &format!(
+            "\n[[robust.parameter]]\nparameter = \"{path}\"\ndistribution = \"lognormal\"\nrelative = false\nmedian = {value:?}\nsd = {:?}\n",
+            sd / value
+        );
+    }
+    let independent = dir.join("independent.toml");
+    std::fs::write(&independent, text).expect("scenario");
+    let alone = p_unstable(&independent, "independent");
+    println!("P(unstable): joint {joint:?}, marginals alone {alone:?}");
+    assert!(
+        joint[0] > 0.0,
+        "the fit's uncertainty reaches the boundary: {joint:?}"
+    );
+    assert!(
+        joint[2] < alone[1],
+        "joint {joint:?} against marginals {alone:?}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// Whether the system tests are required (`.ci/run` sets it): then a
 /// missing system component fails the test instead of skipping it. Hidden
 /// components ([`optional_hidden`]) are never required.

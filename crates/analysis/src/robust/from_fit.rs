@@ -16,7 +16,10 @@
 //!   and `z` the standard normal quantiles of the design's numbers.
 //! * `replicates`: one design dimension picks one of the jackknife's `G`
 //!   replicates, spread about the fit by `sqrt(G - 1)` in the logarithms, so
-//!   their covariance is the fit's and no draw changes sign.
+//!   their covariance is the fit's and no draw changes sign. Only `G`
+//!   distinct stages (28 for a 7 s record): the probability's interval is
+//!   that of the draw from them, and a verdict that turns on a finer
+//!   difference than one stage in `G` is beyond them.
 //!
 //! A fitted parameter without a path in the stage's parameter table (the
 //! one-mass plant's moving mass) is left out: the marginal of the others is
@@ -139,6 +142,13 @@ impl FittedDraw {
             factor,
             log_spreads,
         })
+    }
+
+    /// With `replicates`, the number of distinct stages it can draw (the
+    /// fit's blocks): a probability over them is resolved no finer than
+    /// one over that, however many samples are drawn.
+    pub fn distinct_stages(&self) -> Option<usize> {
+        (self.draw == FitDraw::Replicates).then_some(self.log_spreads.len())
     }
 
     /// Design dimensions it takes: one per parameter, or one for a replicate.
