@@ -123,6 +123,43 @@ impl Parameter {
         })
     }
 
+    /// The parameters whose paths match `pattern`, where `*` stands for
+    /// any run of characters other than `.` (`overrides.bearing_*.f_s`), in
+    /// table order; empty when none does.
+    pub fn matching(pattern: &str, scenario: &Scenario, robot: &RobotSpec) -> Vec<Self> {
+        Self::all(scenario, robot)
+            .into_iter()
+            .filter(|p| Self::path_matches(pattern, p.path()))
+            .collect()
+    }
+
+    /// Whether `path` matches `pattern`, where `*` stands for any run of
+    /// characters other than `.`.
+    pub fn path_matches(pattern: &str, path: &str) -> bool {
+        let (p, s) = (pattern.as_bytes(), path.as_bytes());
+        let (mut i, mut j) = (0, 0);
+        let (mut star, mut resume) = (None, 0);
+        while j < s.len() {
+            if i < p.len() && p[i] == b'*' {
+                star = Some(i);
+                resume = j;
+                i += 1;
+            } else if i < p.len() && p[i] == s[j] {
+                i += 1;
+                j += 1;
+            } else if let Some(k) = star
+                && s[resume] != b'.'
+            {
+                i = k + 1;
+                resume += 1;
+                j = resume;
+            } else {
+                return false;
+            }
+        }
+        p[i..].iter().all(|&c| c == b'*')
+    }
+
     /// Every parameter of the study, in table order: gains, platform
     /// velocity, then element by element (frictions, isolators, actuators,
     /// sensors, link masses), then the scale and spread parameters.
@@ -385,7 +422,11 @@ impl Parameter {
 
     /// Writes `value` into the study after checking the parameter's rule. The
     /// LuGre rule that joins two keys (`f_s >= f_c`) is checked when the model
-    /// is assembled, once every override is in.
+    /// is assembled, once every override is in. A robot-file value is written
+    /// over the scenario's `[overrides]`: they are applied to `robot` first
+    /// and taken out of `scenario`, so a study parameter the scenario also
+    /// overrides takes the study's value, and a scale (`alpha`, `beta`,
+    /// `spread.*`) scales the overridden value.
     pub fn write(
         &self,
         scenario: &mut Scenario,
@@ -426,7 +467,16 @@ impl Parameter {
                     *slot = value;
                 }
             }
-            _ => self.write_robot(robot, value),
+            _ => {
+                // The scenario's own overrides go in first, so the study's
+                // value is the last word on its key (applied after it, an
+                // override would silently replace a drawn or swept value).
+                if !scenario.overrides.is_empty() {
+                    crate::assembly::apply_overrides(robot, scenario)?;
+                    scenario.overrides.clear();
+                }
+                self.write_robot(robot, value);
+            }
         }
         Ok(())
     }
@@ -767,6 +817,46 @@ mod tests {
         ] {
             assert!(paths.iter().any(|p| p == path), "{path} in {paths:?}");
         }
+    }
+
+    /// A study value on a key the scenario also overrides is the one the
+    /// model gets (the damped four-bearing study overrides every isolator's
+    /// c_x and draws it too), and a scale scales the overridden value.
+    #[test]
+    fn a_study_value_wins_over_the_scenarios_override_of_its_key() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios");
+        let scenario =
+            Scenario::from_file(&dir.join("robust/four_bearing_damped.toml")).expect("scenario");
+        let file = RobotSpec::from_file(&scenario.robot).expect("robot");
+        let path = "overrides.isolator_fl.c_x";
+        let built = |assignments: &[(&str, f64)]| {
+            let (mut s, mut r) = (scenario.clone(), file.clone());
+            for &(path, value) in assignments {
+                let parameter = Parameter::resolve(path, &s, &r).expect("resolves");
+                parameter.write(&mut s, &mut r, value).expect("writes");
+            }
+            let (_, model) = crate::assemble(r, &s).expect("assembles");
+            let parameter = Parameter::resolve(path, &s, model.robot()).expect("resolves");
+            parameter.read_model(&model).expect("a robot value")
+        };
+        assert_eq!(built(&[]), 80.0, "the scenario's override");
+        assert_eq!(built(&[(path, 123.0)]), 123.0);
+        let scaled = built(&[("alpha", 0.5)]);
+        assert!(
+            (scaled - 40.0).abs() < 1e-12,
+            "alpha scales the override: {scaled}"
+        );
+        // Another element's override still holds beside a written value.
+        let (mut s, mut r) = (scenario.clone(), file.clone());
+        Parameter::resolve(path, &s, &r)
+            .expect("resolves")
+            .write(&mut s, &mut r, 123.0)
+            .expect("writes");
+        let (_, model) = crate::assemble(r, &s).expect("assembles");
+        let other = Parameter::resolve("overrides.isolator_rr.c_x", &s, model.robot())
+            .expect("resolves")
+            .read_model(&model);
+        assert_eq!(other, Some(80.0));
     }
 
     fn round_trips((scenario, robot): (Scenario, RobotSpec)) {

@@ -110,33 +110,6 @@ pub struct SampleResult {
     pub refused: Option<String>,
 }
 
-/// Whether `path` matches `pattern`, where `*` stands for any run of
-/// characters other than `.`.
-fn matches(pattern: &str, path: &str) -> bool {
-    let (p, s) = (pattern.as_bytes(), path.as_bytes());
-    let (mut i, mut j) = (0, 0);
-    let (mut star, mut resume) = (None, 0);
-    while j < s.len() {
-        if i < p.len() && p[i] == b'*' {
-            star = Some(i);
-            resume = j;
-            i += 1;
-        } else if i < p.len() && p[i] == s[j] {
-            i += 1;
-            j += 1;
-        } else if let Some(k) = star
-            && s[resume] != b'.'
-        {
-            i = k + 1;
-            resume += 1;
-            j = resume;
-        } else {
-            return false;
-        }
-    }
-    p[i..].iter().all(|&c| c == b'*')
-}
-
 impl RobustSpec {
     /// Reads the scenario's `[robust]` table and resolves it against the
     /// study (`robot` as written in its file), with `samples` and `seed`
@@ -312,10 +285,7 @@ fn resolve_entry(
     robot: &RobotSpec,
 ) -> Result<Vec<Target>, LoadError> {
     let parameters: Vec<Parameter> = if entry.parameter.contains('*') {
-        let found: Vec<Parameter> = Parameter::all(scenario, robot)
-            .into_iter()
-            .filter(|p| matches(&entry.parameter, p.path()))
-            .collect();
+        let found = Parameter::matching(&entry.parameter, scenario, robot);
         if found.is_empty() {
             return Err(scenario.error(
                 format!("{key}.parameter"),
@@ -625,17 +595,23 @@ mod tests {
 
     #[test]
     fn patterns_match_within_a_name() {
-        assert!(matches(
+        assert!(Parameter::path_matches(
             "overrides.bearing_*.f_s",
             "overrides.bearing_fl.f_s"
         ));
-        assert!(!matches(
+        assert!(!Parameter::path_matches(
             "overrides.bearing_*.f_s",
             "overrides.bearing_fl.f_c"
         ));
-        assert!(!matches("overrides.*.f_s", "overrides.a.b.f_s"));
-        assert!(matches("overrides.*.*", "overrides.iso.k_x"));
-        assert!(matches("controller.k", "controller.k"));
-        assert!(!matches("controller.k", "controller.k_i"));
+        assert!(!Parameter::path_matches(
+            "overrides.*.f_s",
+            "overrides.a.b.f_s"
+        ));
+        assert!(Parameter::path_matches(
+            "overrides.*.*",
+            "overrides.iso.k_x"
+        ));
+        assert!(Parameter::path_matches("controller.k", "controller.k"));
+        assert!(!Parameter::path_matches("controller.k", "controller.k_i"));
     }
 }
