@@ -81,6 +81,7 @@ pub struct LabStage {
     scenario: Scenario,
     friction: LugreParams,
     friction_name: String,
+    contacts: Vec<(String, LugreParams)>,
     mass: f64,
     sensor: String,
     actuator: String,
@@ -115,6 +116,7 @@ impl LabStage {
             scenario,
             friction: LugreParams::paper_table1(),
             friction_name: String::new(),
+            contacts: Vec::new(),
             mass: 0.0,
             sensor: String::new(),
             actuator: String::new(),
@@ -124,11 +126,10 @@ impl LabStage {
             file: stage.source.clone(),
             message,
         };
-        let [friction] = model.frictions() else {
-            return Err(problem(format!(
-                "the lab tests need a stage with exactly one friction contact, this one has {}",
-                model.frictions().len()
-            )));
+        let Some(friction) = model.frictions().first() else {
+            return Err(problem(
+                "the lab tests need a stage with a friction contact (fistage:friction)".into(),
+            ));
         };
         // The scenario's servo names the sensor and actuator; else the first ones.
         let servo = stage.scenario.controller.as_ref();
@@ -146,6 +147,9 @@ impl LabStage {
         };
         stage.friction = friction.lugre;
         stage.friction_name = friction.name.clone();
+        stage.contacts = (model.frictions().iter())
+            .map(|f| (f.name.clone(), f.lugre))
+            .collect();
         stage.sensor = sensor.name.clone();
         stage.actuator = actuator.name.clone();
         stage.mass = model.bodies().iter().map(|b| b.mass).sum();
@@ -161,6 +165,31 @@ impl LabStage {
     /// the truth the identification should find.
     pub fn friction(&self) -> LugreParams {
         self.friction
+    }
+
+    /// Every friction contact: name and LuGre parameters.
+    pub fn contacts(&self) -> &[(String, LugreParams)] {
+        &self.contacts
+    }
+
+    /// The sensor the records read first (the servo's, else the first).
+    pub fn sensor(&self) -> &str {
+        &self.sensor
+    }
+
+    /// Refuses a stage with more than one contact, for the tests that
+    /// measure one contact's friction (`what` names the test).
+    pub(crate) fn single_contact(&self, what: &str) -> Result<()> {
+        match self.contacts.len() {
+            1 => Ok(()),
+            n => Err(IdentError::Simulation {
+                file: self.source.clone(),
+                message: format!(
+                    "{what} measures one friction contact, and this stage has {n}; make a \
+                     record (simulate-record) and fit the stage (identify record --stage)"
+                ),
+            }),
+        }
     }
 
     /// Name of the friction contact.
@@ -180,6 +209,17 @@ impl LabStage {
         scenario.platform_velocity = 0.0;
         let (_, model) = assemble(self.robot.clone(), &scenario)?;
         Ok(model)
+    }
+
+    /// The state an open-loop record starts from: the scenario's start
+    /// (what a stage fit of the record assumes).
+    pub(crate) fn start_state(&self, model: &Model) -> Result<Vec<f64>> {
+        let mut scenario = self.scenario.clone();
+        scenario.controller = None;
+        scenario.compensation = None;
+        scenario.observer = None;
+        scenario.platform_velocity = 0.0;
+        Ok(fistage_model::initial_state(model, &scenario)?)
     }
 
     /// Indices of the actuator force and the sensor position among the model's signals.
@@ -446,6 +486,7 @@ impl StribeckLab {
     /// that (the bearing rings on the isolator, or stick-slips); the paper
     /// locked its isolators for this test, i.e. use the rigid stage.
     pub fn measure(&self, stage: &LabStage) -> Result<StribeckMeasurement> {
+        stage.single_contact("the steady-state friction test")?;
         let servo = ControllerSettings {
             sensor: stage.sensor.clone(),
             actuator: stage.actuator.clone(),
@@ -637,6 +678,7 @@ impl FrfLab {
 
     /// Runs the test: one stepped-sine run per frequency.
     pub fn measure(&self, stage: &LabStage) -> Result<FrfMeasurement> {
+        stage.single_contact("the pre-motion FRF test")?;
         let model = stage.model(None)?;
         let signals = stage.force_and_position(&model)?;
         let runs = runs(self.frequencies_hz.len(), self.seed, |i, seed| {

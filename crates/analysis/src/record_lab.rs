@@ -13,7 +13,7 @@
 //! disturbance entering as an external force the servo does not log.
 
 use fistage_ident::record::program::lab_program;
-use fistage_ident::record::{LabErrors, Record, Segment, StartState};
+use fistage_ident::record::{LabErrors, Record, Segment, SensorColumn, StartState};
 use fistage_ident::{IdentError, Result};
 use std::path::Path;
 
@@ -33,6 +33,9 @@ pub struct RecordLab {
     pub errors: LabErrors,
     /// Integration tolerance of the stage.
     pub tolerance: Tolerance,
+    /// Sensors read besides the main one (a bearing encoder), each a
+    /// column `<sensor>_m` of the record.
+    pub further_sensors: Vec<String>,
 }
 
 impl RecordLab {
@@ -48,6 +51,7 @@ impl RecordLab {
                 rtol: 1e-10,
                 atol_scale: 1.0,
             },
+            further_sensors: Vec::new(),
         }
     }
 
@@ -60,8 +64,11 @@ impl RecordLab {
             )));
         }
         check_samples(PROGRAM_DURATION, self.dt)?;
-        let friction = stage.friction();
-        let (time, force, segments) = lab_program(friction.f_c, friction.f_s, self.dt);
+        // The program's levels from the stage's whole friction (the
+        // contacts move together under the drive).
+        let (f_c, f_s) =
+            (stage.contacts().iter()).fold((0.0, 0.0), |(c, s), (_, p)| (c + p.f_c, s + p.f_s));
+        let (time, force, segments) = lab_program(f_c, f_s, self.dt);
         let n = time.len();
         if n < fistage_ident::record::data::MIN_SAMPLES {
             return Err(IdentError::InvalidOption(format!(
@@ -78,7 +85,23 @@ impl RecordLab {
         };
         let model = stage.model(None)?;
         let [_, sensor] = stage.force_and_position(&model)?;
-        let x0 = model.zero_state();
+        let further: Vec<(String, usize)> = (self.further_sensors.iter())
+            .map(|name| {
+                model
+                    .signal_index(&format!("{name}.position"))
+                    .map(|i| (name.clone(), i))
+                    .ok_or_else(|| {
+                        let names: Vec<&str> =
+                            model.sensors().iter().map(|s| s.name.as_str()).collect();
+                        IdentError::InvalidOption(format!(
+                            "{}: the stage has no sensor '{name}' (its sensors: {})",
+                            stage.source(),
+                            names.join(", ")
+                        ))
+                    })
+            })
+            .collect::<Result<_>>()?;
+        let x0 = stage.start_state(&model)?;
         let t_end = time[n - 1];
         let trajectory = simulate(&model, &x0, &excitation, t_end, self.dt, self.tolerance)
             .map_err(|e| stage.simulation_error("the identification run", e))?;
@@ -91,7 +114,21 @@ impl RecordLab {
             ));
         }
         self.errors.measure(&mut position);
-        let record = csv_record(stage.source().to_string(), time, force, position);
+        let mut record = csv_record(stage.source().to_string(), time, force, position);
+        for (k, (name, index)) in further.into_iter().enumerate() {
+            let mut values: Vec<f64> = signals.columns[index].iter().take(n).copied().collect();
+            // Each encoder has its own noise.
+            LabErrors {
+                seed: self.errors.seed.wrapping_add(1 + k as u64),
+                ..self.errors
+            }
+            .measure(&mut values);
+            record.sensors.push(SensorColumn {
+                column: format!("{name}_m"),
+                sensor: name,
+                values,
+            });
+        }
         Ok((record, segments))
     }
 }
@@ -190,6 +227,7 @@ fn csv_record(source: String, time: Vec<f64>, force: Vec<f64>, position: Vec<f64
         force,
         position,
         start: StartState::default(),
+        sensors: Vec::new(),
     }
 }
 

@@ -7,4 +7,5 @@ mod closed_loop_record;
 mod from_fit;
 mod lab;
 mod robust;
+mod stage_fit;
 mod sweep_settings;

@@ -21,7 +21,7 @@ use std::path::Path;
 use crate::Complex;
 use crate::error::{IdentError, Result};
 use crate::frf::FrfData;
-use crate::record::{Record, StartState};
+use crate::record::{Record, SensorColumn, StartState};
 use crate::stribeck::StribeckData;
 use crate::units::{Quantity, Unit};
 
@@ -102,6 +102,7 @@ pub fn parse_record_csv(source: &str, text: &str, units: &UnitOverrides) -> Resu
         time: table.values(&time)?,
         force: table.values(&force)?,
         position: table.values(&position)?,
+        sensors: table.sensor_columns(&[time.index, force.index, position.index])?,
         columns: [time.name, force.name, position.name],
         start: StartState::default(),
     };
@@ -263,6 +264,25 @@ pub(crate) fn match_header(name: &str, quantity: Quantity) -> HeaderMatch {
     bad.map_or(HeaderMatch::No, HeaderMatch::BadUnit)
 }
 
+/// The sensor a further position column reads, and its unit:
+/// `("bearing_encoder", nm)` for `bearing_encoder_nm` or `bearing_encoder
+/// [nm]`; None for a name without a position unit.
+pub(crate) fn sensor_header(name: &str) -> Option<(String, Unit)> {
+    let trimmed = name.trim();
+    let lower = trimmed.to_lowercase();
+    let (stem, unit_text) = match split_bracket(&lower) {
+        (stem, Some(unit)) => (stem.to_string(), unit.to_string()),
+        (_, None) => {
+            let (stem, unit) = lower.rsplit_once(['_', ' '])?;
+            (stem.trim().to_string(), unit.to_string())
+        }
+    };
+    let unit = Unit::parse(Quantity::Position, &unit_text)?;
+    // The sensor's name as written (names are case sensitive in robot files).
+    let sensor = trimmed.get(..stem.len())?.trim().to_string();
+    (!sensor.is_empty()).then_some((sensor, unit))
+}
+
 /// `("velocity", Some("mm/s"))` for `velocity [mm/s]` or `velocity (mm/s)`.
 fn split_bracket(lower: &str) -> (&str, Option<&str>) {
     for (open, close) in [('[', ']'), ('(', ')')] {
@@ -331,6 +351,32 @@ impl Table {
             headers,
             records,
         })
+    }
+
+    /// Every column but `taken` whose name is a sensor's with a position
+    /// unit (`bearing_encoder_nm`, `bearing [um]`).
+    fn sensor_columns(&self, taken: &[usize]) -> Result<Vec<SensorColumn>> {
+        let mut out = Vec::new();
+        for (index, name) in self.headers.iter().enumerate() {
+            if taken.contains(&index) {
+                continue;
+            }
+            let Some((sensor, unit)) = sensor_header(name) else {
+                continue;
+            };
+            let column = Column {
+                index,
+                name: name.clone(),
+                quantity: Quantity::Position,
+                unit,
+            };
+            out.push(SensorColumn {
+                sensor,
+                column: name.clone(),
+                values: self.values(&column)?,
+            });
+        }
+        Ok(out)
     }
 
     fn lines(&self) -> Vec<u64> {

@@ -9,6 +9,8 @@
 //! * [`frf`] fits sigma0, sigma1 + sigma2 (and the mass) to the pre-motion FRF;
 //! * [`record`] fits all six LuGre parameters (and the mass) to a recorded
 //!   run (force command and encoder position) by output error;
+//! * [`stage`] fits any stage's parameters (paths of its parameter table) to
+//!   one or more records, and says what the records cannot determine;
 //! * [`uncertainty`] gives 95% intervals and residual statistics;
 //! * [`synth`] makes seeded synthetic data from known parameters;
 //! * [`report`] turns fits into JSON, a table and a scenario override.
@@ -30,11 +32,13 @@ pub mod csv_input;
 mod error;
 mod exact;
 pub mod frf;
+mod jackknife;
 mod linalg;
 mod lm;
 mod qp;
 pub mod record;
 pub mod report;
+pub mod stage;
 pub mod stribeck;
 pub mod synth;
 pub mod uncertainty;

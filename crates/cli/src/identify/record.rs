@@ -6,6 +6,8 @@
 //! fistage identify record DATA [--mass M | --fit-mass] [--json] [--out DIR]
 //!                              [--segments FILE] [--loss l2|huber] [--horizon S|whole]
 //!                              [--closed-loop SCENARIO]
+//! fistage identify record DATA... --stage SCENARIO --fit PATH[,PATH...] [--closed-loop]
+//!                              [--allow-undetermined] [--json] [--out DIR]
 //! fistage identify simulate-record ROBOT_OR_SCENARIO --out DATA.csv|DATA.mat [--seed N]
 //!                              [--exact] [--quantum M] [--noise M] [--disturbance N]
 //!                              [--closed-loop [--duration S]]
@@ -22,6 +24,7 @@ use fistage_ident::record::{
     SegmentChoice, ServoLoop, fit_record, read_record, read_segments, record_fit_csv,
     record_override,
 };
+use fistage_ident::stage::{Loop, StageOptions, StagePlant, StageProgress, StageReport, fit_stage};
 use fistage_ident::{Loss, Quantity, UnitOverrides};
 
 use super::shared::{
@@ -53,8 +56,24 @@ enum RecordLoss {
 #[derive(Args)]
 #[command(after_help = CONVENTIONS)]
 pub struct RecordArgs {
-    /// The record: CSV or `.mat` with time, force and position.
-    data: PathBuf,
+    /// The records: CSV or `.mat` with time, force and position (and, for a
+    /// stage fit, further sensors as `<sensor>_<unit>` columns). The
+    /// one-mass fit takes one; a stage fit takes several, fitted jointly.
+    #[arg(required = true, num_args = 1..)]
+    data: Vec<PathBuf>,
+    /// Fit a scenario's whole stage (any robot file) instead of the one-mass
+    /// plant: the parameters named by --fit, the rest as the scenario has them.
+    #[arg(long, value_name = "SCENARIO", requires = "fit")]
+    stage: Option<PathBuf>,
+    /// The parameters a stage fit estimates: paths of the parameter table
+    /// (`overrides.isolator.k_x`, `overrides.friction_*.f_c`), comma separated.
+    #[arg(
+        long,
+        value_name = "PATH[,PATH...]",
+        value_delimiter = ',',
+        requires = "stage"
+    )]
+    fit: Vec<String>,
     /// Known moving mass, kg.
     #[arg(long, value_name = "KG", conflicts_with = "fit_mass")]
     mass: Option<f64>,
@@ -77,8 +96,9 @@ pub struct RecordArgs {
     #[arg(long, value_name = "S|whole", default_value = "0.01")]
     horizon: String,
     /// A closed-loop record: the scenario whose servo and reference drove
-    /// the stage (its stage must be one mass on one contact).
-    #[arg(long, value_name = "SCENARIO")]
+    /// the stage (its stage must be one mass on one contact). With --stage,
+    /// give it without a value: the --stage scenario's servo drove it.
+    #[arg(long, value_name = "SCENARIO", num_args = 0..=1, default_missing_value = "")]
     closed_loop: Option<PathBuf>,
     /// Relative tolerance of the plant simulation.
     #[arg(long, default_value_t = 1e-8)]
@@ -127,18 +147,34 @@ pub struct SimulateRecordArgs {
     /// Length of a closed-loop record, s (the scenario's duration by default).
     #[arg(long, value_name = "S", requires = "closed_loop")]
     duration: Option<f64>,
+    /// A further sensor of the stage to record (a bearing encoder), as a
+    /// column `<sensor>_m`; repeat for several.
+    #[arg(long = "sensor", value_name = "NAME", conflicts_with = "closed_loop")]
+    sensors: Vec<String>,
 }
 
 /// Runs `fistage identify record`.
 pub fn run_record(args: &RecordArgs) -> Result<()> {
-    check_element(&args.output)?;
-    let units = UnitOverrides {
-        time: unit_flag(Quantity::Time, &args.time_unit)?,
-        force: unit_flag(Quantity::Force, &args.force_unit)?,
-        position: unit_flag(Quantity::Position, &args.position_unit)?,
-        ..UnitOverrides::default()
+    if let Some(stage) = &args.stage {
+        return run_stage(args, stage);
+    }
+    let [data] = args.data.as_slice() else {
+        bail!(
+            "the one-mass fit takes one record ({} given); fit several jointly with --stage \
+             SCENARIO --fit PATHS",
+            args.data.len()
+        );
     };
-    let mut record = read_record(&args.data, &units)?;
+    if args
+        .closed_loop
+        .as_ref()
+        .is_some_and(|p| p.as_os_str().is_empty())
+    {
+        bail!("--closed-loop needs the scenario whose servo drove the record (or --stage)");
+    }
+    check_element(&args.output)?;
+    let units = record_units(args)?;
+    let mut record = read_record(data, &units)?;
     record.start.velocity = args.start_velocity;
     record.start.bristle = args.start_bristle;
     record.check()?;
@@ -200,6 +236,81 @@ pub fn run_record(args: &RecordArgs) -> Result<()> {
     verdict.map_err(|e| nothing_written(e, &args.output))
 }
 
+/// The record units of the `--*-unit` flags.
+fn record_units(args: &RecordArgs) -> Result<UnitOverrides> {
+    Ok(UnitOverrides {
+        time: unit_flag(Quantity::Time, &args.time_unit)?,
+        force: unit_flag(Quantity::Force, &args.force_unit)?,
+        position: unit_flag(Quantity::Position, &args.position_unit)?,
+        ..UnitOverrides::default()
+    })
+}
+
+/// `fistage identify record DATA... --stage SCENARIO --fit PATHS`.
+fn run_stage(args: &RecordArgs, stage: &Path) -> Result<()> {
+    let units = record_units(args)?;
+    let records = (args.data.iter())
+        .map(|path| read_record(path, &units))
+        .collect::<std::result::Result<Vec<_>, _>>()?;
+    let scenario = fistage_model::Scenario::from_file(stage)?;
+    let robot = fistage_model::RobotSpec::from_file(&scenario.robot)?;
+    let drive = if args.closed_loop.is_some() {
+        Loop::Closed
+    } else {
+        Loop::Open
+    };
+    let plant = StagePlant::new(&scenario, &robot, &args.fit, drive)?;
+    let options = StageOptions {
+        rtol: args.rtol.max(1e-12),
+        loss: match args.loss {
+            RecordLoss::L2 => Loss::L2,
+            RecordLoss::Huber => Loss::Huber,
+        },
+        ..StageOptions::default()
+    };
+    let bar = crate::progress::bar("fitting the stage");
+    let fit = fit_stage(&plant, &records, &options, &mut |p: &StageProgress| {
+        crate::progress::set_fraction(&bar, p.horizon_fraction);
+        if p.rms.is_finite() {
+            bar.set_message(format!(
+                "{}: iteration {}, rms {:.3e} noise levels",
+                p.stage, p.iterations, p.rms
+            ));
+        }
+        true
+    })?;
+    bar.finish_and_clear();
+    let report = StageReport::new(&stage.display().to_string(), &fit);
+    let json = serde_json::to_string_pretty(&report)?;
+    let undetermined = report.undetermined.clone();
+    let refused = !undetermined.is_empty() && !args.output.allow_undetermined;
+    if let (Some(target), false) = (&args.output.out, refused) {
+        let folder = ResultFolder::begin(target, args.output.force)?;
+        let dir = folder.path();
+        for (name, text) in [
+            ("fit.json", format!("{json}\n")),
+            ("override.toml", report.override_toml()),
+        ] {
+            let path = dir.join(name);
+            std::fs::write(&path, text)
+                .with_context(|| format!("{}: cannot write", path.display()))?;
+        }
+        folder.commit()?;
+    }
+    print_report(args.output.json, &json, &report.table());
+    if refused {
+        return Err(nothing_written(
+            anyhow::anyhow!(
+                "not determined by these records: {} (left at the scenario's values; \
+                 --allow-undetermined accepts the fit as it is)",
+                undetermined.join(", ")
+            ),
+            &args.output,
+        ));
+    }
+    Ok(())
+}
+
 fn write_record_outputs(
     dir: &Path,
     record: &Record,
@@ -245,6 +356,7 @@ pub fn simulate_record(args: &SimulateRecordArgs) -> Result<()> {
     let stage = LabStage::load(&common.stage)?;
     let mut lab = RecordLab::new(common.seed);
     lab.dt = 1.0 / args.rate;
+    lab.further_sensors = args.sensors.clone();
     lab.errors = if common.exact {
         LabErrors::exact()
     } else {
@@ -308,8 +420,28 @@ pub fn simulate_record(args: &SimulateRecordArgs) -> Result<()> {
     Ok(())
 }
 
-/// Prints the stage's true parameters as JSON.
+/// Prints the stage's true parameters as JSON (every contact's for a
+/// stage with several).
 fn print_truth(stage: &LabStage) {
+    if let [_, _, ..] = stage.contacts() {
+        let contacts: serde_json::Map<String, serde_json::Value> = (stage.contacts().iter())
+            .map(|(name, p)| {
+                let values = serde_json::json!({
+                    "f_c": p.f_c, "f_s": p.f_s, "v_s": p.v_s, "sigma0": p.sigma0,
+                    "sigma1": p.sigma1, "sigma2": p.sigma2,
+                });
+                (name.clone(), values)
+            })
+            .collect();
+        println!(
+            "true friction of {} contacts ({}), moving mass {} kg: {}",
+            contacts.len(),
+            stage.source(),
+            stage.moving_mass(),
+            serde_json::Value::Object(contacts)
+        );
+        return;
+    }
     let p = stage.friction();
     let truth = serde_json::json!({
         "f_c": p.f_c, "f_s": p.f_s, "v_s": p.v_s, "sigma0": p.sigma0,
@@ -330,22 +462,31 @@ fn write_record(path: &Path, record: &Record) -> Result<()> {
         .is_some_and(|e| e.eq_ignore_ascii_case("mat"));
     let result = if is_mat {
         let mut bytes = Vec::new();
-        fistage_model::mat::write_columns(
-            &mut bytes,
-            &[
-                ("t_s", &record.time),
-                ("f_servo_N", &record.force),
-                ("x_m", &record.position),
-            ],
-        )
-        .and_then(|()| fistage_model::output::write_whole(path, &bytes))
+        let mut columns: Vec<(&str, &[f64])> = vec![
+            ("t_s", &record.time),
+            ("f_servo_N", &record.force),
+            ("x_m", &record.position),
+        ];
+        for s in &record.sensors {
+            columns.push((&s.column, &s.values));
+        }
+        fistage_model::mat::write_columns(&mut bytes, &columns)
+            .and_then(|()| fistage_model::output::write_whole(path, &bytes))
     } else {
-        let mut text = String::from("t_s,f_servo_N,x_m\n");
+        let mut text = String::from("t_s,f_servo_N,x_m");
+        for s in &record.sensors {
+            text += &format!(",{}", s.column);
+        }
+        text.push('\n');
         for k in 0..record.len() {
             text += &format!(
-                "{},{},{}\n",
+                "{},{},{}",
                 record.time[k], record.force[k], record.position[k]
             );
+            for s in &record.sensors {
+                text += &format!(",{}", s.values[k]);
+            }
+            text.push('\n');
         }
         fistage_model::output::write_whole(path, text.as_bytes())
     };

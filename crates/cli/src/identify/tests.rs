@@ -324,3 +324,59 @@ fn a_failed_fit_writes_nothing() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A stage fit's records and paths are checked against the stage before
+/// anything is fitted: a path that names nothing, a column no sensor reads,
+/// several records without --stage, all refused by name; and the flags parse.
+#[test]
+fn stage_fits_refuse_what_does_not_fit_the_stage() {
+    let dir = scratch("stage-refusals");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let scenario = root.join("scenarios/paper/fig05b_fi.toml");
+    let record = dir.join("record.csv");
+    let mut text = String::from("t_s,f_servo_N,x_nm,bearing_nm\n");
+    for k in 0..100 {
+        text += &format!("{},0,0,0\n", k as f64 * 1e-4);
+    }
+    std::fs::write(&record, text).unwrap();
+    let line = |extra: &str| {
+        format!(
+            "identify record {} --stage {} {extra}",
+            record.display(),
+            scenario.display()
+        )
+    };
+    assert!(parse(&line("")).is_err(), "--stage needs --fit");
+    assert!(
+        parse(&format!(
+            "identify record {} --fit overrides.isolator.k_x",
+            record.display()
+        ))
+        .is_err()
+    );
+    let run_line = |extra: &str| -> String {
+        let IdentifyCommand::Record(args) = parse(&line(extra)).expect("parses").fit else {
+            panic!("a record fit");
+        };
+        format!("{:#}", run_record(&args).expect_err("refused"))
+    };
+    let message = run_line("--fit overrides.nothing.k_x");
+    assert!(message.contains("nothing"), "{message}");
+    let message = run_line("--fit overrides.isolator.k_x,overrides.bearing_friction.f_c");
+    assert!(
+        message.contains("bearing_nm") && message.contains("no sensor 'bearing'"),
+        "{message}"
+    );
+    let IdentifyCommand::Record(args) = parse(&format!(
+        "identify record {} {}",
+        record.display(),
+        record.display()
+    ))
+    .expect("parses")
+    .fit
+    else {
+        panic!("a record fit");
+    };
+    let message = format!("{:#}", run_record(&args).expect_err("refused"));
+    assert!(message.contains("takes one record"), "{message}");
+}

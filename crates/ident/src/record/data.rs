@@ -22,6 +22,19 @@ pub struct StartState {
     pub bristle: f64,
 }
 
+/// A further position column of a record: the reading of a named sensor
+/// (`bearing_encoder_nm` is sensor `bearing_encoder`), SI units. The
+/// position column proper is the stage's main sensor.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SensorColumn {
+    /// The sensor's name, from the column's name without its unit.
+    pub sensor: String,
+    /// The column (or variable) as written.
+    pub column: String,
+    /// The readings, m, one per sample.
+    pub values: Vec<f64>,
+}
+
 /// A recorded run in SI units.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Record {
@@ -42,6 +55,9 @@ pub struct Record {
     pub position: Vec<f64>,
     /// The state at the first sample.
     pub start: StartState,
+    /// Further sensors' readings (columns named `<sensor>_<unit>`), for a
+    /// stage fit; the one-mass fit reads only `position`.
+    pub sensors: Vec<SensorColumn>,
 }
 
 impl Record {
@@ -62,6 +78,7 @@ impl Record {
             force,
             position,
             start: StartState::default(),
+            sensors: Vec::new(),
         };
         record.check()?;
         Ok(record)
@@ -134,6 +151,30 @@ impl Record {
                 return Err(self.error(column, Some(k), format!("{} is not finite", values[k])));
             }
         }
+        for (i, sensor) in self.sensors.iter().enumerate() {
+            let error = |k: Option<usize>, message: String| self.sensor_error(sensor, k, message);
+            if sensor.values.len() != n {
+                return Err(error(
+                    None,
+                    format!("{} values against {n} times", sensor.values.len()),
+                ));
+            }
+            if let Some(k) = sensor.values.iter().position(|v| !v.is_finite()) {
+                return Err(error(
+                    Some(k),
+                    format!("{} is not finite", sensor.values[k]),
+                ));
+            }
+            if let Some(other) = self.sensors[..i].iter().find(|o| o.sensor == sensor.sensor) {
+                return Err(error(
+                    None,
+                    format!(
+                        "ambiguous: both '{}' and this column read sensor '{}'; rename one",
+                        other.column, sensor.sensor
+                    ),
+                ));
+            }
+        }
         if let Some(k) = self.time.windows(2).position(|w| w[1] <= w[0]) {
             return Err(self.error(
                 0,
@@ -152,6 +193,35 @@ impl Record {
             )));
         }
         Ok(())
+    }
+
+    /// An error about sample `k` (or the whole column) of a sensor column.
+    pub(crate) fn sensor_error(
+        &self,
+        sensor: &SensorColumn,
+        k: Option<usize>,
+        message: String,
+    ) -> IdentError {
+        match k {
+            Some(k) if self.row_word == "element" => IdentError::BadElement {
+                file: self.source.clone(),
+                variable: sensor.column.clone(),
+                element: k + 1,
+                message,
+            },
+            Some(k) => IdentError::BadCell {
+                file: self.source.clone(),
+                line: self.rows.get(k).copied().unwrap_or(k as u64 + 1),
+                row: k + 1,
+                column: sensor.column.clone(),
+                message,
+            },
+            None => IdentError::InsufficientData {
+                file: self.source.clone(),
+                column: sensor.column.clone(),
+                message,
+            },
+        }
     }
 
     /// An error about sample `k` (or the whole column) of column `column`.

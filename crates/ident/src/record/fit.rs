@@ -36,6 +36,7 @@ use super::segments::{Segment, anchors, blocks, detect_segments};
 use super::servo_loop::ServoLoop;
 use super::start::{StartEstimate, derivatives, estimate_start};
 use crate::error::{IdentError, Result};
+use crate::jackknife::{self, rho, weight};
 use crate::stribeck::Loss;
 use crate::uncertainty::{Estimate, ResidualStats, mad_scale, t95};
 
@@ -679,50 +680,17 @@ impl Problem<'_> {
         } else {
             f64::INFINITY
         };
-        let (h, _) = normal_equations(&outcome.misfit, p, self.loss, threshold);
         let jac = &outcome.misfit.sim.jacobian;
         let r = &outcome.misfit.residual;
-        let blocks: Vec<(DVector<f64>, DMatrix<f64>)> = block_ranges
-            .iter()
-            .map(|&(a, b)| {
-                let mut score = DVector::<f64>::zeros(p);
-                let mut info = DMatrix::<f64>::zeros(p, p);
-                for k in a..b {
-                    let w = weight(self.loss, r[k], threshold);
-                    let row = &jac[k * p..(k + 1) * p];
-                    for i in 0..p {
-                        score[i] += w * r[k] * row[i];
-                        for j in 0..p {
-                            info[(i, j)] += w * row[i] * row[j];
-                        }
-                    }
-                }
-                (score, info)
-            })
-            .collect();
+        let w = |k: usize| weight(self.loss, r[k], threshold);
+        let (h, _) = jackknife::normal_equations(jac, r, &w, p);
+        let found = jackknife::block_jackknife(&h, jac, r, &w, block_ranges);
+        let inverse = found.as_ref().map(|j| j.inverse.clone());
+        let (jackknife, replicates) = match found {
+            Some(j) => (Some(j.covariance), Some(j.replicates)),
+            None => (None, None),
+        };
         let g = block_ranges.len() as f64;
-        let inverse = scaled_inverse(&h);
-        // Delete-one-block jackknife, linearised: leaving block b out moves
-        // the estimate by (H - H_b)^-1 g_b.
-        let replicates: Option<Vec<DVector<f64>>> = inverse.as_ref().map(|hi| {
-            blocks
-                .iter()
-                .map(|(score, info)| {
-                    let without = &h - info;
-                    without
-                        .cholesky()
-                        .map(|c| c.solve(score))
-                        .unwrap_or_else(|| hi * score)
-                })
-                .collect()
-        });
-        let jackknife = replicates.as_ref().map(|deltas| {
-            let mut cov = DMatrix::<f64>::zeros(p, p);
-            for delta in deltas {
-                cov += delta * delta.transpose();
-            }
-            cov * ((g - 1.0) / g)
-        });
         let n = r.len() as f64;
         let s2 = outcome.misfit.residual.iter().map(|v| v * v).sum::<f64>() / (n - p as f64);
         let t = t95((g - 1.0).max(1.0));
@@ -771,63 +739,9 @@ fn normal_equations(
     loss: Loss,
     threshold: f64,
 ) -> (DMatrix<f64>, DVector<f64>) {
-    let mut h = DMatrix::zeros(p, p);
-    let mut g = DVector::zeros(p);
-    let jac = &misfit.sim.jacobian;
-    for (k, &r) in misfit.residual.iter().enumerate() {
-        let row = &jac[k * p..(k + 1) * p];
-        let w = weight(loss, r, threshold);
-        for i in 0..p {
-            g[i] += w * row[i] * r;
-            for j in 0..=i {
-                h[(i, j)] += w * row[i] * row[j];
-            }
-        }
-    }
-    for i in 0..p {
-        for j in 0..i {
-            h[(j, i)] = h[(i, j)];
-        }
-    }
-    (h, g)
-}
-
-/// The inverse of a symmetric positive matrix by Jacobi-scaled Cholesky;
-/// None when it is singular to working precision.
-fn scaled_inverse(h: &DMatrix<f64>) -> Option<DMatrix<f64>> {
-    let p = h.nrows();
-    let d: Vec<f64> = (0..p).map(|i| h[(i, i)].max(0.0).sqrt()).collect();
-    if d.iter().any(|&v| v == 0.0 || !v.is_finite()) {
-        return None;
-    }
-    let scaled = DMatrix::from_fn(p, p, |i, j| h[(i, j)] / (d[i] * d[j]));
-    let eigen = scaled.clone().symmetric_eigen();
-    let (lo, hi) = eigen
-        .eigenvalues
-        .iter()
-        .fold((f64::INFINITY, 0.0f64), |(a, b), &e| (a.min(e), b.max(e)));
-    if lo.is_nan() || lo <= 1e-13 * hi {
-        return None;
-    }
-    let inv = scaled.cholesky()?.inverse();
-    Some(DMatrix::from_fn(p, p, |i, j| inv[(i, j)] / (d[i] * d[j])))
-}
-
-/// The loss of one residual (half the square for L2).
-fn rho(loss: Loss, r: f64, threshold: f64) -> f64 {
-    let a = r.abs();
-    match loss {
-        Loss::Huber if a > threshold => threshold * a - 0.5 * threshold * threshold,
-        _ => 0.5 * r * r,
-    }
-}
-
-/// The IRLS weight of one residual.
-fn weight(loss: Loss, r: f64, threshold: f64) -> f64 {
-    match loss {
-        Loss::Huber if r.abs() > threshold => threshold / r.abs(),
-        _ => 1.0,
-    }
+    let r = &misfit.residual;
+    let w = |k: usize| weight(loss, r[k], threshold);
+    jackknife::normal_equations(&misfit.sim.jacobian, r, &w, p)
 }
 
 fn rms(r: &[f64]) -> f64 {

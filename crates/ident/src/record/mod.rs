@@ -39,7 +39,7 @@ pub mod servo_loop;
 pub mod start;
 pub mod synth;
 
-pub use data::{Record, StartState};
+pub use data::{Record, SensorColumn, StartState};
 pub use fit::{
     FitProgress, JointUncertainty, MassChoice, RecordFit, RecordOptions, SegmentChoice, fit_record,
 };

@@ -7,8 +7,10 @@ use std::path::Path;
 
 use fistage_model::mat::{MatContent, MatVariable, read_variables};
 
-use super::data::{Record, StartState};
-use crate::csv_input::{HeaderMatch, UnitOverrides, match_header, parse_record_csv, read_file};
+use super::data::{Record, SensorColumn, StartState};
+use crate::csv_input::{
+    HeaderMatch, UnitOverrides, match_header, parse_record_csv, read_file, sensor_header,
+};
 use crate::error::{IdentError, Result};
 use crate::units::{Quantity, Unit};
 
@@ -58,6 +60,8 @@ pub fn parse_record_mat(source: &str, bytes: &[u8], units: &UnitOverrides) -> Re
     let (time_name, time) = find(Quantity::Time)?;
     let (force_name, force) = find(Quantity::Force)?;
     let (position_name, position) = find(Quantity::Position)?;
+    let taken = [&time_name, &force_name, &position_name];
+    let sensors = sensor_variables(source, &variables, &taken)?;
     let record = Record {
         source: source.to_string(),
         rows: (1..=time.len() as u64).collect(),
@@ -67,9 +71,54 @@ pub fn parse_record_mat(source: &str, bytes: &[u8], units: &UnitOverrides) -> Re
         force,
         position,
         start: StartState::default(),
+        sensors,
     };
     record.check()?;
     Ok(record)
+}
+
+/// Every variable but `taken` named like a sensor with a position unit
+/// (`bearing_encoder_nm`), in SI units.
+fn sensor_variables(
+    source: &str,
+    variables: &[MatVariable],
+    taken: &[&String],
+) -> Result<Vec<SensorColumn>> {
+    let mut out = Vec::new();
+    for variable in variables.iter().filter(|v| !taken.contains(&&v.name)) {
+        let Some((sensor, unit)) = sensor_header(&variable.name) else {
+            continue;
+        };
+        let values = vector(source, variable)?;
+        out.push(SensorColumn {
+            sensor,
+            column: variable.name.clone(),
+            values: values.iter().map(|&v| unit.to_si(v)).collect(),
+        });
+    }
+    Ok(out)
+}
+
+/// The values of a real numeric vector variable.
+fn vector<'a>(source: &str, variable: &'a MatVariable) -> Result<&'a Vec<f64>> {
+    match &variable.content {
+        MatContent::Numeric { rows, cols, data } if *rows == 1 || *cols == 1 => Ok(data),
+        MatContent::Numeric { rows, cols, .. } => Err(variable_error(
+            source,
+            &variable.name,
+            format!("a {rows} x {cols} matrix; a vector is needed"),
+        )),
+        MatContent::Complex => Err(variable_error(
+            source,
+            &variable.name,
+            "complex; real values are needed".into(),
+        )),
+        MatContent::Other(class) => Err(variable_error(
+            source,
+            &variable.name,
+            format!("a {class} array; a numeric vector is needed"),
+        )),
+    }
 }
 
 /// The one vector variable holding `quantity`, in SI units.
@@ -142,30 +191,7 @@ fn find_variable(
             ));
         }
     };
-    let values = match &variable.content {
-        MatContent::Numeric { rows, cols, data } if *rows == 1 || *cols == 1 => data,
-        MatContent::Numeric { rows, cols, .. } => {
-            return Err(variable_error(
-                source,
-                &variable.name,
-                format!("a {rows} x {cols} matrix; a vector is needed"),
-            ));
-        }
-        MatContent::Complex => {
-            return Err(variable_error(
-                source,
-                &variable.name,
-                "complex; real values are needed".into(),
-            ));
-        }
-        MatContent::Other(class) => {
-            return Err(variable_error(
-                source,
-                &variable.name,
-                format!("a {class} array; a numeric vector is needed"),
-            ));
-        }
-    };
+    let values = vector(source, variable)?;
     Ok((
         variable.name.clone(),
         values.iter().map(|&v| unit.to_si(v)).collect(),

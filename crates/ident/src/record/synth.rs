@@ -120,6 +120,7 @@ impl RecordSynth {
             force: acting,
             position: vec![0.0; n],
             start: StartState::default(),
+            sensors: Vec::new(),
         };
         let theta = Theta::new(&self.lugre, self.mass);
         let tolerance = PlantTolerance::for_theta(&theta, 1e-11);
