@@ -18,21 +18,36 @@ class Fit:
     def __init__(self, report):
         self.report = report
 
+    def _entries(self):
+        listed = self.report.get("parameters")
+        if isinstance(listed, list):
+            # A stage fit: parameters by path and by short name.
+            entries = {e["path"]: e for e in listed}
+            entries.update({e["name"]: e for e in listed})
+            return entries
+        return {k: v for k, v in self.report.items() if isinstance(v, dict) and "value" in v}
+
     def __getitem__(self, name):
-        entry = self.report.get(name)
-        if not isinstance(entry, dict) or "value" not in entry:
-            names = [k for k, v in self.report.items() if isinstance(v, dict) and "value" in v]
-            raise KeyError("no parameter %r (fitted: %s)" % (name, ", ".join(names)))
+        entry = self._entries().get(name)
+        if entry is None:
+            raise KeyError("no parameter %r (fitted: %s)" % (name, ", ".join(self.parameters)))
         return entry
 
     def __contains__(self, name):
-        entry = self.report.get(name)
-        return isinstance(entry, dict) and "value" in entry
+        return name in self._entries()
 
     @property
     def parameters(self):
-        """The fitted parameters' names."""
-        return [k for k, v in self.report.items() if isinstance(v, dict) and "value" in v]
+        """The fitted parameters' names (paths for a stage fit)."""
+        listed = self.report.get("parameters")
+        if isinstance(listed, list):
+            return [e["path"] for e in listed]
+        return list(self._entries())
+
+    @property
+    def undetermined(self):
+        """A stage fit's paths the records cannot determine (left at the scenario's values)."""
+        return list(self.report.get("undetermined", []))
 
     @property
     def not_identifiable(self):
@@ -84,7 +99,8 @@ def frf(freq, response=None, magnitude=None, phase=None, mass=None, sigma2=None)
     return Fit(json.loads(text))
 
 
-def record(t, force, position, mass=None, loss="l2", horizon=0.01, progress=None, closed_loop=None):
+def record(t=None, force=None, position=None, mass=None, loss="l2", horizon=0.01, progress=None,
+           closed_loop=None, scenario=None, paths=None, records=None):
     """Fits all six LuGre parameters (and the mass unless given, kg) to a
     recorded run by output error on the position (paper Eq. 31): t in s,
     force in N held over each sample interval (force[k] acts on
@@ -97,13 +113,51 @@ def record(t, force, position, mass=None, loss="l2", horizon=0.01, progress=None
     whose servo drove the run: the plant is then driven by that servo law
     on the simulated encoder, the logged force giving only the first
     estimates. The result also holds the simulated position as
-    ``fit.simulated``."""
+    ``fit.simulated``.
+
+    With ``scenario`` (a ``fistage.Scenario``) the fit is of that stage
+    (any robot file): ``paths`` are parameter-table paths (``"*"`` within
+    names) fitted to ``records`` jointly, each a dict with ``t``, ``force``,
+    ``position`` (the stage's main sensor) and optionally ``sensors``
+    ({sensor name: readings in m}); t, force, position given as well are
+    one more record. closed_loop is then True when the scenario's own servo
+    drove the records. The result holds ``fit.report["covariance"]`` (what
+    ``Scenario.robust(from_fit=...)`` reads from its file), the
+    ``undetermined`` paths (left at the scenario's values) and
+    ``fit.simulated`` per record and sensor."""
+    if scenario is not None:
+        return _stage(scenario, paths, records, t, force, position, loss, progress, closed_loop)
+    if t is None or force is None or position is None:
+        raise _fistage.Error("give t, force and position, or a scenario with records")
     text, simulated = _fistage._record(
         _floats("t", t), _floats("force", force), _floats("position", position),
         mass=mass, loss=loss, horizon=horizon, progress=progress,
         closed_loop=None if closed_loop is None else str(closed_loop))
     fit = Fit(json.loads(text))
     fit.simulated = numpy.asarray(simulated, dtype=numpy.float64)
+    return fit
+
+
+def _stage(scenario, paths, records, t, force, position, loss, progress, closed_loop):
+    if not paths:
+        raise _fistage.Error("a stage fit needs paths: the parameter-table entries to fit")
+    given = list(records or [])
+    if t is not None:
+        given.append({"t": t, "force": force, "position": position})
+    if not given:
+        raise _fistage.Error("a stage fit needs records")
+    arrays = []
+    for i, entry in enumerate(given):
+        sensors = [(str(name), _floats(f"records[{i}].sensors[{name}]", values))
+                   for name, values in dict(entry.get("sensors", {})).items()]
+        arrays.append((_floats(f"records[{i}].t", entry["t"]),
+                       _floats(f"records[{i}].force", entry["force"]),
+                       _floats(f"records[{i}].position", entry["position"]), sensors))
+    text, simulated = _fistage._stage(
+        scenario, [str(p) for p in paths], arrays, closed_loop=bool(closed_loop), loss=loss,
+        progress=progress)
+    fit = Fit(json.loads(text))
+    fit.simulated = [[numpy.asarray(s, dtype=numpy.float64) for s in per] for per in simulated]
     return fit
 
 

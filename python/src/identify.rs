@@ -6,9 +6,10 @@
 use fistage_analysis::lab::LabStage;
 use fistage_analysis::record_lab::RecordLab;
 use fistage_ident::record::{
-    FitProgress, LabErrors, MassChoice, Record, RecordOptions, RecordReport, ServoLoop, fit_record,
-    read_record,
+    FitProgress, LabErrors, MassChoice, Record, RecordOptions, RecordReport, SensorColumn,
+    ServoLoop, fit_record, read_record,
 };
+use fistage_ident::stage::{Loop, StageOptions, StagePlant, StageProgress, StageReport, fit_stage};
 use fistage_ident::{
     Complex, FrfData, FrfOptions, FrfReport, Loss, MassOption, Sigma2Input, StribeckData,
     StribeckOptions, StribeckReport, UnitOverrides, fit_frf, fit_stribeck, fit_stribeck_asymmetric,
@@ -195,6 +196,82 @@ pub fn _record(
         (result, None) => result.map_err(ident_error)?,
     };
     let report = RecordReport::new(&record, &fit);
+    Ok((json(&report)?, fit.simulated))
+}
+
+/// One record of a stage fit from Python: time, force, main position and
+/// further sensors by name.
+type StageRecordArrays = (Vec<f64>, Vec<f64>, Vec<f64>, Vec<(String, Vec<f64>)>);
+
+/// The stage fit (`identify record --stage --fit`): the parameter-table
+/// `paths` of the scenario's stage fitted to `records` jointly; the report
+/// as JSON text and, per record and sensor, the simulated reading.
+#[pyfunction]
+#[pyo3(signature = (scenario, paths, records, closed_loop = false, loss = "l2", progress = None))]
+pub fn _stage(
+    py: Python<'_>,
+    scenario: &crate::Scenario,
+    paths: Vec<String>,
+    records: Vec<StageRecordArrays>,
+    closed_loop: bool,
+    loss: &str,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<(String, Vec<Vec<Vec<f64>>>)> {
+    let loss = match loss {
+        "l2" => Loss::L2,
+        "huber" => Loss::Huber,
+        other => {
+            return Err(Error::new_err(format!(
+                "loss must be \"l2\" or \"huber\", got \"{other}\""
+            )));
+        }
+    };
+    let (study, robot) = scenario
+        .study()
+        .map_err(|e| crate::LoadError_::new_err(e.to_string()))?;
+    let drive = if closed_loop { Loop::Closed } else { Loop::Open };
+    let plant = StagePlant::new(&study, &robot, &paths, drive).map_err(ident_error)?;
+    let mut list = Vec::new();
+    for (i, (time, force, position, sensors)) in records.into_iter().enumerate() {
+        let mut record = Record::from_arrays(format!("records[{i}]"), time, force, position)
+            .map_err(ident_error)?;
+        record.sensors = (sensors.into_iter())
+            .map(|(sensor, values)| SensorColumn {
+                column: sensor.clone(),
+                sensor,
+                values,
+            })
+            .collect();
+        record.check().map_err(ident_error)?;
+        list.push(record);
+    }
+    let options = StageOptions {
+        loss,
+        ..StageOptions::default()
+    };
+    let mut raised: Option<PyErr> = None;
+    let fit = py.detach(|| {
+        fit_stage(&plant, &list, &options, &mut |p: &StageProgress| {
+            Python::attach(|py| {
+                if let Err(e) = py.check_signals() {
+                    raised = Some(e);
+                    return false;
+                }
+                if let (Some(callback), true) = (&progress, p.rms.is_finite())
+                    && let Err(e) = callback.call1(py, (p.iterations, p.rms))
+                {
+                    raised = Some(e);
+                    return false;
+                }
+                true
+            })
+        })
+    });
+    let fit = match (fit, raised) {
+        (_, Some(e)) => return Err(e),
+        (result, None) => result.map_err(ident_error)?,
+    };
+    let report = StageReport::new(&study.file.display().to_string(), &fit);
     Ok((json(&report)?, fit.simulated))
 }
 

@@ -480,6 +480,7 @@ fn _fistage(m: &Bound<'_, PyModule>) -> PyResult<()> {
     )?;
     m.add_function(wrap_pyfunction!(identify::_stribeck, m)?)?;
     m.add_function(wrap_pyfunction!(identify::_record, m)?)?;
+    m.add_function(wrap_pyfunction!(identify::_stage, m)?)?;
     m.add_function(wrap_pyfunction!(identify::_read_record, m)?)?;
     m.add_function(wrap_pyfunction!(identify::_simulate_record, m)?)?;
     m.add_function(wrap_pyfunction!(identify::_frf, m)?)?;

@@ -115,3 +115,29 @@ def test_record_fit_stops_when_the_callback_raises(root, tmp_path):
     bad.write_text("t_s,force_N,y_nm\n0,0,0\n")
     with pytest.raises(fistage.Error, match="bad.csv.*no position column"):
         fistage.identify.read_record(bad)
+
+
+def test_a_stage_fit_takes_a_scenario_paths_and_several_records(root):
+    """The FI stage's isolator stiffness and bearing friction from two 2 kHz
+    records at once, from a scenario 10% off: the values come back, the
+    covariance names each parameter's path, and the simulated readings are
+    there per record."""
+    robot = (root / "robots/stage_1dof_fi.urdf").as_posix()
+    truth = fistage.Scenario.from_toml(f'robot = "{robot}"\nduration = 1.0\n')
+    start = truth.with_overrides({"overrides.isolator.k_x": 4.4e4,
+                                  "overrides.bearing_friction.f_c": 4.6,
+                                  "overrides.bearing_friction.sigma0": 2.0e6})
+    records = []
+    for seed in (1, 2):
+        t, force, position, _ = fistage.identify.simulate_record(robot, seed=seed, rate=2000.0)
+        records.append({"t": t, "force": force, "position": position})
+    paths = ["overrides.isolator.k_x", "overrides.bearing_friction.f_c",
+             "overrides.bearing_friction.sigma0"]
+    fit = fistage.identify.record(scenario=start, paths=paths, records=records)
+    for path, value in zip(paths, (4e4, 5.1, 2.2e6)):
+        assert fit[path]["value"] == pytest.approx(value, rel=1e-3), path
+    assert fit.undetermined == []
+    assert fit.report["covariance"]["paths"] == paths
+    assert len(fit.simulated) == 2 and fit.simulated[1][0].shape == records[1]["t"].shape
+    with pytest.raises(fistage.Error, match="nothing"):
+        fistage.identify.record(scenario=start, paths=["overrides.nothing.k_x"], records=records)
