@@ -229,7 +229,11 @@ pub fn _stage(
     let (study, robot) = scenario
         .study()
         .map_err(|e| crate::LoadError_::new_err(e.to_string()))?;
-    let drive = if closed_loop { Loop::Closed } else { Loop::Open };
+    let drive = if closed_loop {
+        Loop::Closed
+    } else {
+        Loop::Open
+    };
     let plant = StagePlant::new(&study, &robot, &paths, drive).map_err(ident_error)?;
     let mut list = Vec::new();
     for (i, (time, force, position, sensors)) in records.into_iter().enumerate() {
