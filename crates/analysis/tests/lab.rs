@@ -283,7 +283,7 @@ fn scenarios_apply_their_overrides_and_bad_stages_are_refused() {
     assert!(matches!(error, IdentError::Simulation { .. }), "{error}");
     let message = error.to_string();
     assert!(
-        message.contains("bare.urdf") && message.contains("exactly one friction contact"),
+        message.contains("bare.urdf") && message.contains("need a stage with a friction contact"),
         "{message}"
     );
     // The stage with friction isolators does not settle under the stiff
