@@ -144,10 +144,14 @@ impl RobustSpec {
             oscillation_threshold: raw.oscillation_threshold,
         };
         assessment.check(scenario, "robust")?;
+        // A distribution is about the study's value: the robot file's after
+        // the scenario's own overrides (a drawn value then replaces it).
+        let mut overridden = robot.clone();
+        fistage_model::assembly::apply_overrides(&mut overridden, scenario)?;
         let mut dimensions: Vec<Dimension> = Vec::new();
         for (k, entry) in raw.parameters.iter().enumerate() {
             let key = format!("robust.parameter[{k}]");
-            let targets = resolve_entry(entry, &key, scenario, robot)?;
+            let targets = resolve_entry(entry, &key, scenario, &overridden)?;
             for target in &targets {
                 let taken = dimensions
                     .iter()
@@ -592,6 +596,28 @@ impl Summary {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A distribution is about the scenario's value of its key, override
+    /// included: the damped four-bearing study sets every isolator's c_x to
+    /// 80 N s/m and spreads it +-30%, so every draw lies in [56, 104], not
+    /// about the robot file's 0.5.
+    #[test]
+    fn a_distribution_is_about_the_scenarios_overridden_value() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let scenario = Scenario::from_file(&root.join("scenarios/robust/four_bearing_damped.toml"))
+            .expect("scenario");
+        let robot = RobotSpec::from_file(&scenario.robot).expect("robot");
+        let spec = RobustSpec::from_scenario(&scenario, &robot, Some(64), None).expect("spec");
+        let columns = spec.columns();
+        let c_x = (columns.iter())
+            .position(|t| t.path == "overrides.isolator_fl.c_x")
+            .expect("c_x is drawn");
+        assert_eq!(columns[c_x].nominal, 80.0);
+        for i in 0..64 {
+            let value = spec.values(i)[c_x];
+            assert!((56.0..=104.0).contains(&value), "draw {i}: {value}");
+        }
+    }
 
     #[test]
     fn patterns_match_within_a_name() {
