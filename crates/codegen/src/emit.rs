@@ -227,6 +227,14 @@ impl<'a, 'b> Writer<'a, 'b> {
                 let f = self.function2(function)?;
                 self.call(f, &[at(a)?, at(b)?])
             }
+            Node::Sign(a) => {
+                let a = at(a)?;
+                let zero = self.builder.ins().f64const(0.0);
+                let one = self.builder.ins().f64const(1.0);
+                let signed = self.builder.ins().fcopysign(one, a);
+                let at_zero = self.builder.ins().fcmp(FloatCC::Equal, a, zero);
+                self.builder.ins().select(at_zero, zero, signed)
+            }
         })
     }
 

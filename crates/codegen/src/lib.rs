@@ -59,11 +59,14 @@ mod emit;
 #[cfg(not(feature = "cranelift"))]
 #[path = "emit_none.rs"]
 mod emit;
+mod sensitivity;
+mod tangent;
 mod tape;
 mod traced;
 
 use std::fmt;
 
+pub use sensitivity::{Differentiated, SensitivityKernel, parametric_kernel, sensitivity_kernel};
 pub use traced::Traced;
 
 use fistage_model::machine_code::Compiled;
@@ -188,6 +191,23 @@ fn recording_point(model: &Model, seed: u64) -> (Vec<f64>, InputValues<f64>) {
     (x, inputs)
 }
 
+/// The state and inputs as the traced inputs of a recording.
+fn traced_point(x: &[f64], inputs: &InputValues<f64>) -> (Vec<Traced>, InputValues<Traced>) {
+    let state = x
+        .iter()
+        .enumerate()
+        .map(|(i, v)| Traced::input(Slot::State(i as u32), *v))
+        .collect();
+    let input = |k: u32, v: f64| Traced::input(Slot::Input(k), v);
+    let traced_inputs = InputValues {
+        reference_position: input(0, inputs.reference_position),
+        reference_velocity: input(1, inputs.reference_velocity),
+        servo_force: input(2, inputs.servo_force),
+        platform_velocity: input(3, inputs.platform_velocity),
+    };
+    (state, traced_inputs)
+}
+
 /// Records `function` at `x`, `inputs`.
 fn trace(
     model: &Model,
@@ -197,18 +217,7 @@ fn trace(
 ) -> Result<Tape, NotCompiled> {
     let n = model.n_states();
     tape::record(|| {
-        let mut state: Vec<Traced> = x
-            .iter()
-            .enumerate()
-            .map(|(i, v)| Traced::input(Slot::State(i as u32), *v))
-            .collect();
-        let input = |k: u32, v: f64| Traced::input(Slot::Input(k), v);
-        let traced_inputs = InputValues {
-            reference_position: input(0, inputs.reference_position),
-            reference_velocity: input(1, inputs.reference_velocity),
-            servo_force: input(2, inputs.servo_force),
-            platform_velocity: input(3, inputs.platform_velocity),
-        };
+        let (mut state, traced_inputs) = traced_point(x, inputs);
         let mut ws = model.workspace_of::<Traced>();
         let mut dx = vec![<Traced as fistage_model::Scalar>::constant(0.0); n];
         let mut outputs = Vec::with_capacity(n);
@@ -331,6 +340,15 @@ fn check(model: &Model, native: &Native, function: Function, seed: u64) -> Resul
 mod tests {
     use super::*;
 
+    /// A stage of each kind: on a rail with FI, four bearings on one axis,
+    /// the 6-DOF table, and a servo with an observer.
+    const SHIPPED: [&str; 4] = [
+        "scenarios/paper/fig05b_fi.toml",
+        "scenarios/bench/axis_4fi_fig05b.toml",
+        "scenarios/coupling/friction20_traverse.toml",
+        "scenarios/paper/fig03b_dob_fi.toml",
+    ];
+
     fn shipped(scenario: &str) -> fistage_model::Loaded {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
         fistage_model::load(&root.join(scenario)).expect("loads")
@@ -340,12 +358,7 @@ mod tests {
     /// the recording (not only its machine code) is faithful.
     #[test]
     fn the_recorded_tape_gives_the_evaluations_numbers() {
-        for scenario in [
-            "scenarios/paper/fig05b_fi.toml",
-            "scenarios/bench/axis_4fi_fig05b.toml",
-            "scenarios/coupling/friction20_traverse.toml",
-            "scenarios/paper/fig03b_dob_fi.toml",
-        ] {
+        for scenario in SHIPPED {
             let model = &shipped(scenario).model;
             let n = model.n_states();
             let (x0, inputs0) = recording_point(model, 1);
@@ -376,6 +389,26 @@ mod tests {
                         };
                         assert_eq!(value, wanted, "{scenario}: {function:?} {output:?}");
                     }
+                }
+            }
+        }
+    }
+
+    /// The compiled sensitivity kernel of every kind of shipped stage
+    /// agrees with dual-number evaluations of its right-hand side (the
+    /// check `sensitivity_kernel` runs before handing it out), for one
+    /// direction and for many.
+    #[test]
+    fn sensitivity_kernels_agree_with_dual_numbers() {
+        for scenario in SHIPPED {
+            let model = &shipped(scenario).model;
+            for function in [Differentiated::Rhs, Differentiated::Signals] {
+                for directions in [1, 9] {
+                    let kernel =
+                        sensitivity_kernel(model, function, directions).unwrap_or_else(|why| {
+                            panic!("{scenario}, {function:?}, {directions}: {why}")
+                        });
+                    assert!(kernel.operations() > 0);
                 }
             }
         }

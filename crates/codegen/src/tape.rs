@@ -49,6 +49,10 @@ pub(crate) enum Node {
     Call1(Call1, NodeId),
     /// A two-argument library function.
     Call2(Call2, NodeId, NodeId),
+    /// The sign of `a` with zero at zero: -1, 0 or 1 (the derivative of
+    /// `|a|` with the kink's zero slope, as [`fistage_model::Scalar::kink_abs`];
+    /// made by the tangent transformation, never recorded).
+    Sign(NodeId),
 }
 
 /// Where an input of the compiled function is read from.
@@ -232,6 +236,7 @@ impl Tape {
                 Node::Div(a, b) => at(a) / at(b),
                 Node::Call1(f, a) => f.apply(at(a)),
                 Node::Call2(f, a, b) => f.apply(at(a), at(b)),
+                Node::Sign(a) => sign(at(a)),
             };
             values.push(value);
         }
@@ -256,7 +261,9 @@ impl Tape {
 pub(crate) fn operands(node: &Node) -> impl Iterator<Item = NodeId> {
     let (a, b) = match *node {
         Node::Const(_) | Node::Input(_) => (None, None),
-        Node::Neg(a) | Node::Abs(a) | Node::Sqrt(a) | Node::Call1(_, a) => (Some(a), None),
+        Node::Neg(a) | Node::Abs(a) | Node::Sqrt(a) | Node::Call1(_, a) | Node::Sign(a) => {
+            (Some(a), None)
+        }
         Node::Add(a, b)
         | Node::Sub(a, b)
         | Node::Mul(a, b)
@@ -277,15 +284,21 @@ struct Recorder {
     unusable: Option<String>,
 }
 
+/// The sign of `a` with zero at zero ([`Node::Sign`]).
+#[cfg(test)]
+pub(crate) fn sign(a: f64) -> f64 {
+    if a == 0.0 { 0.0 } else { 1f64.copysign(a) }
+}
+
 /// A node as a hash key (constants by their bit pattern).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-enum NodeKey {
+pub(crate) enum NodeKey {
     Const(u64),
     Input(Slot),
     Op(u8, u32, NodeId, NodeId),
 }
 
-fn key_of(node: &Node) -> NodeKey {
+pub(crate) fn key_of(node: &Node) -> NodeKey {
     let op = |tag: u8, a: NodeId, b: NodeId| NodeKey::Op(tag, 0, a, b);
     match *node {
         Node::Const(c) => NodeKey::Const(c.to_bits()),
@@ -299,6 +312,7 @@ fn key_of(node: &Node) -> NodeKey {
         Node::Div(a, b) => op(6, a, b),
         Node::Call1(f, a) => NodeKey::Op(7, f.code(), a, 0),
         Node::Call2(f, a, b) => NodeKey::Op(8, f.code(), a, b),
+        Node::Sign(a) => op(9, a, 0),
     }
 }
 
