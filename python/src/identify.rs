@@ -173,30 +173,15 @@ pub fn _record(
         closed_loop,
         ..RecordOptions::default()
     };
-    let mut raised: Option<PyErr> = None;
+    let mut report = progress_reporter(progress.as_ref());
     let fit = py.detach(|| {
         fit_record(&record, &options, &mut |p: &FitProgress| {
-            Python::attach(|py| {
-                if let Err(e) = py.check_signals() {
-                    raised = Some(e);
-                    return false;
-                }
-                if let (Some(callback), true) = (&progress, p.iteration > 0)
-                    && let Err(e) = callback.call1(py, (p.iteration, p.rms))
-                {
-                    raised = Some(e);
-                    return false;
-                }
-                true
-            })
+            report.call((p.iteration > 0).then_some((p.iteration, p.rms)))
         })
     });
-    let fit = match (fit, raised) {
-        (_, Some(e)) => return Err(e),
-        (result, None) => result.map_err(ident_error)?,
-    };
-    let report = RecordReport::new(&record, &fit);
-    Ok((json(&report)?, fit.simulated))
+    let fit = report.result(fit)?;
+    let fit_report = RecordReport::new(&record, &fit);
+    Ok((json(&fit_report)?, fit.simulated))
 }
 
 /// One record of a stage fit from Python: time, force, main position and
@@ -253,30 +238,15 @@ pub fn _stage(
         loss,
         ..StageOptions::default()
     };
-    let mut raised: Option<PyErr> = None;
+    let mut report = progress_reporter(progress.as_ref());
     let fit = py.detach(|| {
         fit_stage(&plant, &list, &options, &mut |p: &StageProgress| {
-            Python::attach(|py| {
-                if let Err(e) = py.check_signals() {
-                    raised = Some(e);
-                    return false;
-                }
-                if let (Some(callback), true) = (&progress, p.rms.is_finite())
-                    && let Err(e) = callback.call1(py, (p.iterations, p.rms))
-                {
-                    raised = Some(e);
-                    return false;
-                }
-                true
-            })
+            report.call(p.rms.is_finite().then_some((p.iterations, p.rms)))
         })
     });
-    let fit = match (fit, raised) {
-        (_, Some(e)) => return Err(e),
-        (result, None) => result.map_err(ident_error)?,
-    };
-    let report = StageReport::new(&study.file.display().to_string(), &fit);
-    Ok((json(&report)?, fit.simulated))
+    let fit = report.result(fit)?;
+    let fit_report = StageReport::new(&study.file.display().to_string(), &fit);
+    Ok((json(&fit_report)?, fit.simulated))
 }
 
 /// Reads a record file (CSV or MAT-file, columns by unit suffix): time (s),
@@ -359,4 +329,47 @@ pub fn _simulate_record(
         record.position,
         truth.to_string(),
     ))
+}
+
+/// A fit's progress as Python sees it: Ctrl-C stops the fit, and the
+/// optional `progress(iteration, rms)` callback hears each step; the first
+/// Python error raised on the way ends the fit and is what it returns.
+struct ProgressReporter<'a> {
+    callback: Option<&'a Py<PyAny>>,
+    raised: Option<PyErr>,
+}
+
+fn progress_reporter(callback: Option<&Py<PyAny>>) -> ProgressReporter<'_> {
+    ProgressReporter {
+        callback,
+        raised: None,
+    }
+}
+
+impl ProgressReporter<'_> {
+    /// Reports `step` (iteration, rms) where there is one; whether the fit
+    /// goes on.
+    fn call(&mut self, step: Option<(usize, f64)>) -> bool {
+        Python::attach(|py| {
+            if let Err(e) = py.check_signals() {
+                self.raised = Some(e);
+                return false;
+            }
+            if let (Some(callback), Some(step)) = (self.callback, step)
+                && let Err(e) = callback.call1(py, step)
+            {
+                self.raised = Some(e);
+                return false;
+            }
+            true
+        })
+    }
+
+    /// The fit, or the Python error that stopped it.
+    fn result<T>(self, fit: Result<T, fistage_ident::IdentError>) -> PyResult<T> {
+        match (fit, self.raised) {
+            (_, Some(e)) => Err(e),
+            (result, None) => result.map_err(ident_error),
+        }
+    }
 }

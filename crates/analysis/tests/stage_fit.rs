@@ -43,17 +43,7 @@ fn fi_robot_with_bearing_encoder(dir: &Path) -> PathBuf {
     path
 }
 
-const FI_PATHS: [&str; 9] = [
-    "overrides.isolator.k_x",
-    "overrides.isolator.c_x",
-    "overrides.bearing.mass",
-    "overrides.bearing_friction.f_c",
-    "overrides.bearing_friction.f_s",
-    "overrides.bearing_friction.v_s",
-    "overrides.bearing_friction.sigma0",
-    "overrides.bearing_friction.sigma1",
-    "overrides.bearing_friction.sigma2",
-];
+const FI_PATHS: [&str; 9] = fistage_ident::stage::PAPER_FI_PATHS;
 
 /// 50% off in every parameter (f_s kept above f_c).
 const FI_FAR: &str = "[overrides.isolator]\nk_x = 6e4\nc_x = 1.0\n\

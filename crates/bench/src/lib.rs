@@ -100,9 +100,9 @@ pub struct BenchArgs {
     /// `target/py-venv/bin/python`, else `python3`).
     #[arg(long = "python-run")]
     pub python_run: bool,
-    /// Time the record fit (`identify record`) on 7 s records at 10 kHz, and
-    /// measure its intervals' coverage on 20 disturbed records (both
-    /// horizons: about 90 s).
+    /// Time the record fit (`identify record`, one-mass and stage) on 7 s
+    /// records at 10 kHz, and measure its intervals' coverage on 20
+    /// disturbed records (one-mass, both horizons; the FI stage: minutes).
     #[arg(long)]
     pub record: bool,
     /// Run the peers beside the native engine in the same invocation: CVODE
@@ -342,7 +342,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     if args.record {
         crate::record::record_table(args.repeat)?;
         println!();
-        return crate::record::coverage_table();
+        crate::record::coverage_table()?;
+        println!();
+        return crate::record::stage_coverage_table();
     }
     if args.robust {
         let scenario = args

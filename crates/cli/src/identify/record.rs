@@ -24,7 +24,9 @@ use fistage_ident::record::{
     SegmentChoice, ServoLoop, fit_record, read_record, read_segments, record_fit_csv,
     record_override,
 };
-use fistage_ident::stage::{Loop, StageOptions, StagePlant, StageProgress, StageReport, fit_stage};
+use fistage_ident::stage::{
+    Loop, StageOptions, StagePlant, StageProgress, StageReport, fit_stage, stage_fit_csv,
+};
 use fistage_ident::{Loss, Quantity, UnitOverrides};
 
 use super::shared::{
@@ -92,7 +94,9 @@ pub struct RecordArgs {
     /// follows a rest). 10 ms keeps an unmeasured force from bending the fit
     /// and a closed-loop limit cycle from drifting out of phase; `whole`
     /// suits a smooth closed-loop run (the servo reads every re-anchored,
-    /// quantised position).
+    /// quantised position). With --stage: how often the whole stage is
+    /// translated onto the main sensor, or `whole` for a pure output error
+    /// over growing horizons.
     #[arg(long, value_name = "S|whole", default_value = "0.01")]
     horizon: String,
     /// A closed-loop record: the scenario whose servo and reference drove
@@ -186,17 +190,7 @@ pub fn run_record(args: &RecordArgs) -> Result<()> {
         Some(path) => Some(ServoLoop::from_scenario(path)?),
         None => None,
     };
-    let horizon = match args.horizon.as_str() {
-        "whole" => None,
-        text => Some(
-            text.parse::<f64>()
-                .ok()
-                .filter(|h| h.is_finite() && *h > 0.0)
-                .with_context(|| {
-                    format!("--horizon: '{text}' is neither a positive number of s nor 'whole'")
-                })?,
-        ),
-    };
+    let horizon = horizon(args)?;
     let options = RecordOptions {
         mass: args.mass.map_or(MassChoice::Fit, MassChoice::Known),
         loss: match args.loss {
@@ -209,6 +203,9 @@ pub fn run_record(args: &RecordArgs) -> Result<()> {
         closed_loop,
         ..RecordOptions::default()
     };
+    let folder = (args.output.out.as_ref())
+        .map(|target| ResultFolder::begin(target, args.output.force))
+        .transpose()?;
     let bar = crate::progress::bar("fitting the record");
     let mut iterations = 0usize;
     let fit = fit_record(&record, &options, &mut |p: &FitProgress| {
@@ -227,13 +224,69 @@ pub fn run_record(args: &RecordArgs) -> Result<()> {
     let report = RecordReport::new(&record, &fit).for_element(&args.output.element);
     let json = serde_json::to_string_pretty(&report)?;
     let verdict = refuse_undetermined(&args.output, &report.not_identifiable);
-    if let (Some(target), true) = (&args.output.out, verdict.is_ok()) {
-        let folder = ResultFolder::begin(target, args.output.force)?;
+    if let (Some(folder), true) = (folder, verdict.is_ok()) {
         write_record_outputs(folder.path(), &record, &fit, &report, &json, &args.output)?;
         folder.commit()?;
     }
     print_report(args.output.json, &json, &report.table());
     verdict.map_err(|e| nothing_written(e, &args.output))
+}
+
+/// `--horizon`: a positive number of s, or None for `whole`.
+fn horizon(args: &RecordArgs) -> Result<Option<f64>> {
+    Ok(match args.horizon.as_str() {
+        "whole" => None,
+        text => Some(
+            text.parse::<f64>()
+                .ok()
+                .filter(|h| h.is_finite() && *h > 0.0)
+                .with_context(|| {
+                    format!("--horizon: '{text}' is neither a positive number of s nor 'whole'")
+                })?,
+        ),
+    })
+}
+
+/// The one-mass fit's flags a stage fit has no use for, refused by name
+/// rather than ignored.
+fn refuse_one_mass_flags(args: &RecordArgs) -> Result<()> {
+    let masses =
+        "the stage's masses are its robot file's (fit one with --fit overrides.<link>.mass)";
+    let refusals = [
+        (args.mass.is_some(), "--mass", masses),
+        (args.fit_mass, "--fit-mass", masses),
+        (
+            args.segments.is_some(),
+            "--segments",
+            "a stage fit uses each record whole, re-anchored every --horizon",
+        ),
+        (
+            args.start_velocity != 0.0,
+            "--start-velocity",
+            "a stage fit starts each record from the scenario's start state",
+        ),
+        (
+            args.start_bristle != 0.0,
+            "--start-bristle",
+            "a stage fit starts each record from the scenario's start state",
+        ),
+        (
+            args.output.element != fistage_ident::report::DEFAULT_ELEMENT,
+            "--element",
+            "a stage fit's override.toml names each fitted path itself",
+        ),
+        (
+            args.closed_loop
+                .as_ref()
+                .is_some_and(|p| !p.as_os_str().is_empty()),
+            "--closed-loop SCENARIO",
+            "with --stage, give --closed-loop without a value: the --stage scenario's servo",
+        ),
+    ];
+    match refusals.iter().find(|(given, _, _)| *given) {
+        Some((_, flag, why)) => bail!("{flag} is the one-mass fit's: {why}"),
+        None => Ok(()),
+    }
 }
 
 /// The record units of the `--*-unit` flags.
@@ -248,6 +301,7 @@ fn record_units(args: &RecordArgs) -> Result<UnitOverrides> {
 
 /// `fistage identify record DATA... --stage SCENARIO --fit PATHS`.
 fn run_stage(args: &RecordArgs, stage: &Path) -> Result<()> {
+    refuse_one_mass_flags(args)?;
     let units = record_units(args)?;
     let records = (args.data.iter())
         .map(|path| read_record(path, &units))
@@ -266,8 +320,14 @@ fn run_stage(args: &RecordArgs, stage: &Path) -> Result<()> {
             RecordLoss::L2 => Loss::L2,
             RecordLoss::Huber => Loss::Huber,
         },
+        anchor_every: horizon(args)?,
         ..StageOptions::default()
     };
+    // The folder is taken before the work, so a held or earlier result is
+    // refused at once; it is written only when the fit is accepted.
+    let folder = (args.output.out.as_ref())
+        .map(|target| ResultFolder::begin(target, args.output.force))
+        .transpose()?;
     let bar = crate::progress::bar("fitting the stage");
     let fit = fit_stage(&plant, &records, &options, &mut |p: &StageProgress| {
         crate::progress::set_fraction(&bar, p.horizon_fraction);
@@ -284,12 +344,12 @@ fn run_stage(args: &RecordArgs, stage: &Path) -> Result<()> {
     let json = serde_json::to_string_pretty(&report)?;
     let undetermined = report.undetermined.clone();
     let refused = !undetermined.is_empty() && !args.output.allow_undetermined;
-    if let (Some(target), false) = (&args.output.out, refused) {
-        let folder = ResultFolder::begin(target, args.output.force)?;
+    if let (Some(folder), false) = (folder, refused) {
         let dir = folder.path();
         for (name, text) in [
             ("fit.json", format!("{json}\n")),
             ("override.toml", report.override_toml()),
+            ("data_vs_fit.csv", stage_fit_csv(&records, &fit)),
         ] {
             let path = dir.join(name);
             std::fs::write(&path, text)

@@ -362,6 +362,38 @@ fn stage_fits_refuse_what_does_not_fit_the_stage() {
     };
     let message = run_line("--fit overrides.nothing.k_x");
     assert!(message.contains("nothing"), "{message}");
+    // The one-mass fit's flags are refused by name, not ignored.
+    for flag in [
+        "--mass 1.5",
+        "--fit-mass",
+        "--segments s.csv",
+        "--start-velocity 0.1",
+        "--start-bristle 1e-6",
+        "--element rail",
+        "--closed-loop other.toml",
+    ] {
+        let message = run_line(&format!("--fit overrides.isolator.k_x {flag}"));
+        let name = flag.split_whitespace().next().unwrap_or(flag);
+        assert!(
+            message.contains(name) && message.contains("one-mass fit's"),
+            "{flag}: {message}"
+        );
+    }
+    let message = run_line("--fit overrides.isolator.k_x --horizon 0");
+    assert!(message.contains("--horizon"), "{message}");
+    // An earlier result in --out is refused, and kept.
+    let out = dir.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("fit.json"), "earlier").unwrap();
+    let message = run_line(&format!(
+        "--fit overrides.isolator.k_x --out {}",
+        out.display()
+    ));
+    assert!(message.contains("earlier result"), "{message}");
+    assert_eq!(
+        std::fs::read_to_string(out.join("fit.json")).unwrap(),
+        "earlier"
+    );
     let message = run_line("--fit overrides.isolator.k_x,overrides.bearing_friction.f_c");
     assert!(
         message.contains("bearing_nm") && message.contains("no sensor 'bearing'"),
@@ -379,4 +411,86 @@ fn stage_fits_refuse_what_does_not_fit_the_stage() {
     };
     let message = format!("{:#}", run_record(&args).expect_err("refused"));
     assert!(message.contains("takes one record"), "{message}");
+}
+
+/// A stage fit end to end: a record of the FI stage made by
+/// `simulate-record`, fitted for the isolator's stiffness from 20% off,
+/// writes fit.json, override.toml and data_vs_fit.csv, whose residual
+/// column is the simulated minus the measured reading on every row and
+/// whose RMS is the one fit.json reports.
+#[test]
+fn a_stage_fit_writes_its_data_against_the_fit() {
+    let dir = scratch("stage-files");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let robot = root.join("robots/stage_1dof_fi.urdf");
+    let truth = dir.join("truth.toml");
+    let start = dir.join("start.toml");
+    let robot_line = format!(
+        "robot = {:?}\nduration = 1.0\n",
+        robot.display().to_string()
+    );
+    std::fs::write(&truth, &robot_line).unwrap();
+    std::fs::write(
+        &start,
+        format!("{robot_line}[overrides.isolator]\nk_x = 4.8e4\n"),
+    )
+    .unwrap();
+    let record = dir.join("record.csv");
+    run(&parse(&format!(
+        "identify simulate-record {} --rate 2000 --seed 4 --out {}",
+        truth.display(),
+        record.display()
+    ))
+    .unwrap())
+    .unwrap();
+    let out = dir.join("fit");
+    run(&parse(&format!(
+        "identify record {} --stage {} --fit overrides.isolator.k_x --out {}",
+        record.display(),
+        start.display(),
+        out.display()
+    ))
+    .unwrap())
+    .unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("fit.json")).unwrap()).unwrap();
+    let k_x = json["parameters"][0]["value"].as_f64().unwrap();
+    assert!((k_x / 4e4 - 1.0).abs() < 1e-4, "{k_x}");
+    assert!(
+        std::fs::read_to_string(out.join("override.toml"))
+            .unwrap()
+            .contains("k_x")
+    );
+    let mut reader = csv::Reader::from_path(out.join("data_vs_fit.csv")).unwrap();
+    let header = reader.headers().unwrap().clone();
+    assert_eq!(
+        header.iter().collect::<Vec<_>>(),
+        [
+            "record",
+            "t_s",
+            "force_N",
+            "sensor",
+            "measured_m",
+            "simulated_m",
+            "residual_m"
+        ]
+    );
+    let (mut rows, mut squares) = (0usize, 0.0);
+    for row in reader.records() {
+        let row = row.unwrap();
+        let number = |i: usize| row[i].parse::<f64>().unwrap();
+        let (measured, simulated, residual) = (number(4), number(5), number(6));
+        assert_eq!(residual, simulated - measured);
+        assert_eq!(&row[3], "encoder");
+        squares += residual * residual;
+        rows += 1;
+    }
+    assert_eq!(rows, 14_000, "7 s at 2 kHz, one sensor");
+    let rms = (squares / rows as f64).sqrt();
+    let reported = json["records"][0]["sensors"][0]["rms"].as_f64().unwrap();
+    assert!(
+        (rms / reported - 1.0).abs() < 1e-9,
+        "{rms} against {reported}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }

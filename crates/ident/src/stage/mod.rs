@@ -30,6 +30,22 @@
 //! # }
 //! ```
 
+/// The nine physical parameters of the paper's FI stage
+/// (`robots/stage_1dof_fi.urdf`: the isolator's stiffness and damping, the
+/// bearing's mass and its six LuGre parameters) as parameter-table paths:
+/// what a lab with that stage fits.
+pub const PAPER_FI_PATHS: [&str; 9] = [
+    "overrides.isolator.k_x",
+    "overrides.isolator.c_x",
+    "overrides.bearing.mass",
+    "overrides.bearing_friction.f_c",
+    "overrides.bearing_friction.f_s",
+    "overrides.bearing_friction.v_s",
+    "overrides.bearing_friction.sigma0",
+    "overrides.bearing_friction.sigma1",
+    "overrides.bearing_friction.sigma2",
+];
+
 pub mod fit;
 pub mod identifiability;
 pub mod plant;
@@ -38,4 +54,4 @@ pub mod report;
 pub use fit::{StageFit, StageOptions, StageProgress, fit_stage};
 pub use identifiability::{DETERMINED_LOG_SD, Identifiability};
 pub use plant::{Loop, StagePlant};
-pub use report::StageReport;
+pub use report::{StageReport, stage_fit_csv};

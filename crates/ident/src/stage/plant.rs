@@ -24,8 +24,8 @@
 
 use fistage_codegen::{Differentiated, SensitivityKernel, parametric_kernel, sensitivity_kernel};
 use fistage_model::{
-    DualSVec64, Excitation, Inputs, Model, Parameter, ReferenceSample, RobotSpec, Scenario,
-    ScenarioExcitation, Workspace, assemble, initial_state,
+    DualSVec64, Excitation, Inputs, Model, Parameter, RobotSpec, Scenario, ScenarioExcitation,
+    Workspace, assemble, initial_state,
 };
 use fistage_ode::{AdaptiveMethod, DormandPrince, OdeSystem, Tolerances};
 use nalgebra::{DMatrix, DVector, SVector};
@@ -302,14 +302,7 @@ impl StagePlant {
         if coords.is_empty() {
             return None;
         }
-        let inputs = Inputs {
-            reference: ReferenceSample {
-                position: 0.0,
-                velocity: 0.0,
-            },
-            servo_force: 0.0,
-            platform_velocity: 0.0,
-        };
+        let inputs = Inputs::default();
         let mut ws = model.workspace();
         let x0 = &models.start;
         let h = 1e-6;
@@ -579,12 +572,8 @@ impl<const N: usize> SensitivitySystem<'_, N> {
         match self.excitation {
             Some(e) => e.inputs(t),
             None => Inputs {
-                reference: ReferenceSample {
-                    position: 0.0,
-                    velocity: 0.0,
-                },
                 servo_force: self.held,
-                platform_velocity: 0.0,
+                ..Inputs::default()
             },
         }
     }
@@ -844,19 +833,7 @@ mod tests {
         let scenario =
             Scenario::from_file(&root.join("scenarios/paper/fig05b_fi.toml")).expect("scenario");
         let robot = RobotSpec::from_file(&scenario.robot).expect("robot");
-        let paths: Vec<String> = [
-            "overrides.isolator.k_x",
-            "overrides.isolator.c_x",
-            "overrides.bearing.mass",
-            "overrides.bearing_friction.f_c",
-            "overrides.bearing_friction.f_s",
-            "overrides.bearing_friction.v_s",
-            "overrides.bearing_friction.sigma0",
-            "overrides.bearing_friction.sigma1",
-            "overrides.bearing_friction.sigma2",
-        ]
-        .map(String::from)
-        .to_vec();
+        let paths: Vec<String> = super::super::PAPER_FI_PATHS.map(String::from).to_vec();
         let plant = StagePlant::new(&scenario, &robot, &paths, Loop::Open).expect("plant");
         let n = 3000;
         let time: Vec<f64> = (0..n).map(|k| k as f64 * 1e-4).collect();

@@ -1,8 +1,9 @@
 //! A stage fit as `fit.json` carries it: every parameter with its path,
 //! value, interval and verdict; what the records could not determine; the
 //! joint covariance and replicates (the keys `[robust] from_fit` reads);
-//! the residuals of every record; and `override.toml`, the fitted values as
-//! scenario overrides.
+//! the residuals of every record; `override.toml`, the fitted values as
+//! scenario overrides; and `data_vs_fit.csv`, every reading against the
+//! fitted stage's.
 
 use serde::Serialize;
 
@@ -10,6 +11,7 @@ use super::fit::{RecordResiduals, StageFit, Tie};
 use super::identifiability::{Identifiability, short};
 use super::plant::Loop;
 use crate::covariance::FitCovariance;
+use crate::record::Record;
 
 /// One parameter of a stage fit.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -237,4 +239,40 @@ impl StageReport {
         }
         out
     }
+}
+
+/// `data_vs_fit.csv` of a stage fit: one row per record, sample and
+/// reading (`record` is the record's file), with the measured and the
+/// fitted stage's reading and their difference, m.
+pub fn stage_fit_csv(records: &[Record], fit: &StageFit) -> String {
+    let mut writer = csv::Writer::from_writer(Vec::new());
+    // Writing into memory cannot fail.
+    let _ = writer.write_record([
+        "record",
+        "t_s",
+        "force_N",
+        "sensor",
+        "measured_m",
+        "simulated_m",
+        "residual_m",
+    ]);
+    for ((record, residuals), simulated) in records.iter().zip(&fit.records).zip(&fit.simulated) {
+        for (sensor, readings) in residuals.sensors.iter().zip(simulated) {
+            let measured = (record.sensors.iter())
+                .find(|s| s.column == sensor.column)
+                .map_or(record.position.as_slice(), |s| s.values.as_slice());
+            for (k, (x, s)) in measured.iter().zip(readings).enumerate() {
+                let _ = writer.write_record([
+                    residuals.source.as_str(),
+                    &record.time[k].to_string(),
+                    &record.force[k].to_string(),
+                    &sensor.sensor,
+                    &x.to_string(),
+                    &s.to_string(),
+                    &(s - x).to_string(),
+                ]);
+            }
+        }
+    }
+    String::from_utf8(writer.into_inner().unwrap_or_default()).unwrap_or_default()
 }
