@@ -51,7 +51,7 @@ pub mod identifiability;
 pub mod plant;
 pub mod report;
 
-pub use fit::{StageFit, StageOptions, StageProgress, fit_stage};
+pub use fit::{Continuation, StageFit, StageOptions, StageProgress, fit_stage};
 pub use identifiability::{DETERMINED_LOG_SD, Identifiability};
 pub use plant::{Loop, StagePlant};
 pub use report::{StageReport, stage_fit_csv};

@@ -7,11 +7,14 @@
 
 use serde::Serialize;
 
-use super::fit::{RecordResiduals, StageFit, Tie};
+use super::fit::{Continuation, RecordResiduals, StageFit, Tie};
 use super::identifiability::{Identifiability, short};
 use super::plant::Loop;
 use crate::covariance::FitCovariance;
 use crate::record::Record;
+
+/// A residual this many times the record's noise is worth a warning.
+const FAR_ABOVE_NOISE: f64 = 30.0;
 
 /// One parameter of a stage fit.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -69,6 +72,10 @@ pub struct StageReport {
     pub records: Vec<RecordResiduals>,
     /// Horizons fitted, s.
     pub horizons: Vec<f64>,
+    /// Which continuation gave the values: `anchored`, or
+    /// `growing_horizons` (pure output error, then the anchored last phase,
+    /// where the anchored one stopped well above the noise).
+    pub continuation: Continuation,
     /// Iterations.
     pub iterations: usize,
     /// Whether the last iterations stopped on their own.
@@ -151,6 +158,7 @@ impl StageReport {
             replicates,
             records: fit.records.clone(),
             horizons: fit.horizons.clone(),
+            continuation: fit.continuation,
             iterations: fit.iterations,
             converged: fit.converged,
             rhs_evaluations: fit.rhs_evaluations,
@@ -160,10 +168,14 @@ impl StageReport {
     /// A table for the terminal.
     pub fn table(&self) -> String {
         let mut out = format!(
-            "stage fit of {} ({} loop), {} iterations{}\n",
+            "stage fit of {} ({} loop), {} iterations{}{}\n",
             self.scenario,
             self.drive,
             self.iterations,
+            match self.continuation {
+                Continuation::Anchored => "",
+                Continuation::GrowingHorizons => ", from growing horizons",
+            },
             if self.converged {
                 ""
             } else {
@@ -191,6 +203,14 @@ impl StageReport {
                     "{} ({}, sensor {}): rms residual {:.3e} m, largest {:.3e} m, noise {:.2e} m\n",
                     record.source, s.column, s.sensor, s.rms, s.max_abs, s.noise
                 );
+                if s.rms > FAR_ABOVE_NOISE * s.noise {
+                    out += &format!(
+                        "warning: that residual is {:.0} times the noise the record shows: an \
+                         unmeasured force, a model that does not match the stage, or a local \
+                         minimum (try another start); the intervals hold only if the model fits\n",
+                        s.rms / s.noise
+                    );
+                }
             }
         }
         if !self.undetermined.is_empty() {
