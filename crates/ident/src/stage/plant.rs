@@ -278,11 +278,10 @@ impl StagePlant {
             anchors,
         };
         // Each lane count compiles the model's whole evaluation once more
-        // in dual numbers: three sizes keep the build short and waste at
-        // most half the lanes.
+        // in dual numbers, which runs only where no kernel is compiled (a
+        // build without the code generator): two sizes keep the build short.
         match p {
-            0..=8 => self.simulate_lanes::<8>(run),
-            9..=16 => self.simulate_lanes::<16>(run),
+            0..=16 => self.simulate_lanes::<16>(run),
             _ => self.simulate_lanes::<MAX_PARAMETERS>(run),
         }
     }
