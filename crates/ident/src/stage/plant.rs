@@ -225,7 +225,7 @@ impl StagePlant {
                 let shifted = |factor: f64| {
                     let mut v = values.to_vec();
                     v[j] *= factor;
-                    let model = compiled(self.model_at(&v)?);
+                    let model = self.model_at(&v)?;
                     let start = initial_state(&model, &self.scenario)?;
                     Ok::<_, IdentError>((model, start))
                 };
@@ -245,6 +245,17 @@ impl StagePlant {
         if !sensitive.is_empty() {
             let shifted: Vec<(&Model, &Model)> = models.plus.iter().zip(&models.minus).collect();
             models.rhs_kernel = parametric_kernel(&models.centre, &shifted, LOG_STEP).ok();
+            // The shifted models run only for a parameter the kernel does
+            // not carry: only those are worth compiling.
+            for j in 0..sensitive.len() {
+                let carried = (models.rhs_kernel.as_ref()).is_some_and(|k| k.includes_parameter(j));
+                if !carried {
+                    for model in [&models.plus[j], &models.minus[j]] {
+                        let _ =
+                            fistage_codegen::machine_code(model, fistage_codegen::Function::Rhs);
+                    }
+                }
+            }
         }
         Ok(models)
     }
