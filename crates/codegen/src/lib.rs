@@ -26,7 +26,10 @@
 //! of the bristle states ([`Model::rhs_implicit_bristles`]) when the model
 //! has any. The model keeps what [`machine_code`] compiled and runs it from
 //! [`Model::rhs`] from then on (the engines of `fistage-sim` compile once a
-//! run has made 10 000 evaluations).
+//! run has made 10 000 evaluations). A fit's forward sensitivities get a
+//! third kind of function, kept by the caller: the right-hand side or the
+//! signals differentiated along several state directions on the tape
+//! itself ([`sensitivity_kernel`], [`parametric_kernel`]).
 //!
 //! ```
 //! use fistage_codegen::{Function, machine_code};
