@@ -216,7 +216,7 @@ impl LabStage {
     pub(crate) fn start_state(&self, model: &Model) -> Result<Vec<f64>> {
         let mut scenario = self.scenario.clone();
         scenario.controller = None;
-        scenario.compensation = None;
+        scenario.compensation.clear();
         scenario.observer = None;
         scenario.platform_velocity = 0.0;
         Ok(fistage_model::initial_state(model, &scenario)?)

@@ -407,12 +407,14 @@ impl<'a> Assembler<'a> {
         })
     }
 
-    /// The feedforward compensator of `[compensation]`: its model, the
+    /// A feedforward compensator of `[compensation]`: its model, the
     /// treatment of the isolator that carries the modelled element (dynamic
-    /// unless `isolator` says otherwise), and its states.
+    /// unless `isolator` says otherwise), and its states (named
+    /// `compensation.<element>.*` when the servo has `several`).
     fn feedforward(
         &mut self,
         settings: &CompensationSettings,
+        several: bool,
         robot: &RobotSpec,
         scenario: &Scenario,
         frictions: &[FrictionContact],
@@ -455,20 +457,24 @@ impl<'a> Assembler<'a> {
             }
         }
         let state_index = self.names.len();
+        let prefix = match (&settings.element, several) {
+            (Some(element), true) => format!("compensation.{element}"),
+            _ => "compensation".to_string(),
+        };
         if bearing.is_some() {
             self.push_state(
-                "compensation.deflection".into(),
+                format!("{prefix}.deflection"),
                 StateKind::CompensatorDeflection,
                 1e-4,
             );
             self.push_state(
-                "compensation.bearing_velocity".into(),
+                format!("{prefix}.bearing_velocity"),
                 StateKind::CompensatorVelocity,
                 1e-2,
             );
         }
         let (kind, suffix, nominal) = model.state();
-        self.push_state(format!("compensation.{suffix}"), kind, nominal);
+        self.push_state(format!("{prefix}.{suffix}"), kind, nominal);
         Ok(Feedforward {
             element: settings.element.clone(),
             model,
@@ -629,16 +635,19 @@ impl<'a> Assembler<'a> {
                     self.push_state("controller.integral".into(), StateKind::ErrorIntegral, 1e-4);
                     index
                 });
-                let feedforward = match &scenario.compensation {
-                    Some(compensation) => Some(self.feedforward(
-                        compensation,
-                        robot,
-                        scenario,
-                        &frictions,
-                        &isolators,
-                    )?),
-                    None => None,
-                };
+                let several = scenario.compensation.len() > 1;
+                let feedforward = (scenario.compensation.iter())
+                    .map(|compensation| {
+                        self.feedforward(
+                            compensation,
+                            several,
+                            robot,
+                            scenario,
+                            &frictions,
+                            &isolators,
+                        )
+                    })
+                    .collect::<Result<Vec<_>, _>>()?;
                 let observer = scenario.observer.map(|settings| {
                     let state_index = self.names.len();
                     self.push_state("dob.state".into(), StateKind::ObserverState, 1.0);
@@ -723,8 +732,14 @@ fn signal_list(model: &Structure) -> Vec<SignalInfo> {
     if let Some(controller) = &model.controller {
         push("controller.reference".into(), "m");
         push("controller.error".into(), "m");
-        if controller.feedforward.is_some() {
+        if !controller.feedforward.is_empty() {
             push("compensation.force".into(), "N");
+        }
+        if controller.feedforward.len() > 1 {
+            for feedforward in &controller.feedforward {
+                let element = feedforward.element.as_deref().unwrap_or("model");
+                push(format!("compensation.{element}.force"), "N");
+            }
         }
         if controller.observer.is_some() {
             push("dob.estimate".into(), "N");

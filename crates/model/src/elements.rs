@@ -201,8 +201,9 @@ pub struct Controller {
     /// Index of the integral of the tracking error in the state vector (present
     /// only when k_i > 0, so that a PD loop has no spurious zero eigenvalue).
     pub integral_index: Option<usize>,
-    /// Feedforward friction compensation, if any (`[compensation]`).
-    pub feedforward: Option<Feedforward>,
+    /// Feedforward friction compensators (`[compensation]` or
+    /// `[[compensation]]`), at most [`crate::compensation::MAX_COMPENSATORS`].
+    pub feedforward: Vec<Feedforward>,
     /// Disturbance observer, if any (`[dob]`).
     pub observer: Option<Observer>,
 }

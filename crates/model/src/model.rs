@@ -38,7 +38,7 @@ pub struct Model {
     pub(crate) notes: Vec<String>,
     /// The scenario's `[compensation]` and `[dob]` as written (the
     /// parameter table reads the compensator's and observer's values here).
-    pub(crate) compensation: Option<crate::compensation::CompensationSettings>,
+    pub(crate) compensation: Vec<crate::compensation::CompensationSettings>,
     pub(crate) observer: Option<crate::compensation::ObserverSettings>,
 }
 
@@ -251,22 +251,24 @@ impl Model {
         for (contact, z) in self.structure.frictions.iter().zip(ws.bristles.solved()) {
             x[contact.z_index] = *z;
         }
-        if let Some(index) = self.compensator_bristle() {
-            x[index] = ws.bristles.solved_compensator();
+        if let Some(controller) = &self.structure.controller {
+            let solved = ws.bristles.solved_compensators();
+            for (feedforward, w) in controller.feedforward.iter().zip(solved) {
+                if let Some(index) = feedforward.bristle_state() {
+                    x[index] = *w;
+                }
+            }
         }
     }
 
     /// Indices of the bristle states: the LuGre contacts' in contact order,
-    /// then a feedforward compensator's LuGre model's.
+    /// then the feedforward compensators' LuGre models', in servo order.
     pub fn bristle_states(&self) -> Vec<usize> {
         let contacts = self.structure.frictions.iter().map(|f| f.z_index);
-        contacts.chain(self.compensator_bristle()).collect()
-    }
-
-    /// The bristle state of a feedforward compensator's LuGre model.
-    fn compensator_bristle(&self) -> Option<usize> {
-        let controller = self.structure.controller.as_ref()?;
-        controller.feedforward.as_ref()?.bristle_state()
+        let compensators = (self.structure.controller.iter())
+            .flat_map(|c| &c.feedforward)
+            .filter_map(|f| f.bristle_state());
+        contacts.chain(compensators).collect()
     }
 
     /// State derivative by the general recursive dynamics, for any model and

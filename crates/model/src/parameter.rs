@@ -80,10 +80,11 @@ enum Target {
     Isolator(usize, &'static IsolatorKey),
     Point(Element, usize),
     LinkMass(usize),
-    /// A parameter of the feedforward compensator's model.
-    Compensation(ModelKey),
+    /// A parameter of a feedforward compensator's model (the compensator's
+    /// index in the scenario).
+    Compensation(usize, ModelKey),
     /// The relative error on one.
-    CompensationError(ModelKey),
+    CompensationError(usize, ModelKey),
     Observer(ObserverKey),
     /// A number key of `[reference]`.
     Reference(&'static str),
@@ -171,16 +172,23 @@ impl Parameter {
                 push(format!("controller.{}", gain.key()), Target::Gain(gain));
             }
         }
-        if let Some(compensation) = &scenario.compensation {
+        // One compensator's parameters are `compensation.<key>`; several
+        // are told apart by their elements, `compensation.<element>.<key>`.
+        let several = scenario.compensation.len() > 1;
+        for (i, compensation) in scenario.compensation.iter().enumerate() {
+            let prefix = match (&compensation.element, several) {
+                (Some(element), true) => format!("compensation.{element}"),
+                _ => "compensation".to_string(),
+            };
             for key in compensation.kind.keys() {
                 push(
-                    format!("compensation.{}", key.name),
-                    Target::Compensation(key),
+                    format!("{prefix}.{}", key.name),
+                    Target::Compensation(i, key),
                 );
             }
             for key in compensation.kind.keys() {
-                let path = format!("compensation.error.{}", key.name);
-                push(path, Target::CompensationError(key));
+                let path = format!("{prefix}.error.{}", key.name);
+                push(path, Target::CompensationError(i, key));
             }
         }
         if scenario.observer.is_some() {
@@ -266,8 +274,8 @@ impl Parameter {
             Target::Isolator(_, key) => key.unit,
             Target::Point(..) => "m",
             Target::LinkMass(_) => "kg",
-            Target::Compensation(key) => key.unit,
-            Target::CompensationError(_) => "1",
+            Target::Compensation(_, key) => key.unit,
+            Target::CompensationError(..) => "1",
             Target::Observer(key) => key.unit(),
             Target::Reference(key) => reference_unit(key),
         }
@@ -282,8 +290,8 @@ impl Parameter {
             Target::Spread(_) => Rule::Spread,
             Target::Lugre(_, key) => key.rule,
             Target::Isolator(..) => IsolatorSpec::RULE,
-            Target::Compensation(key) => key.rule,
-            Target::CompensationError(_) => ERROR_RULE,
+            Target::Compensation(_, key) => key.rule,
+            Target::CompensationError(..) => ERROR_RULE,
             Target::Observer(_) => ObserverKey::RULE,
             Target::Reference(key) => Reference::key_rule(key),
         }
@@ -306,8 +314,8 @@ impl Parameter {
             Target::Gain(_)
                 | Target::Lugre(..)
                 | Target::Isolator(..)
-                | Target::Compensation(_)
-                | Target::CompensationError(_)
+                | Target::Compensation(..)
+                | Target::CompensationError(..)
                 | Target::Observer(_)
         )
     }
@@ -336,15 +344,18 @@ impl Parameter {
                 element_name(robot, element)
             ),
             Target::LinkMass(i) => format!("mass of link {}", robot.links[i].name),
-            Target::Compensation(key) => {
+            Target::Compensation(_, key) => {
                 format!(
-                    "feedforward compensator's {} ({})",
-                    key.name, key.description
+                    "feedforward compensator{}'s {} ({})",
+                    self.compensated_element(),
+                    key.name,
+                    key.description
                 )
             }
-            Target::CompensationError(key) => {
+            Target::CompensationError(_, key) => {
                 format!(
-                    "relative error on the feedforward compensator's {}",
+                    "relative error on the feedforward compensator{}'s {}",
+                    self.compensated_element(),
                     key.name
                 )
             }
@@ -353,15 +364,25 @@ impl Parameter {
         }
     }
 
+    /// ` of <element>` when the path names the element a compensator
+    /// models (`compensation.<element>.<key>`), else nothing.
+    fn compensated_element(&self) -> String {
+        let rest = self.path.strip_prefix("compensation.").unwrap_or_default();
+        match rest.split_once('.') {
+            Some((first, _)) if first != "error" => format!(" of {first}"),
+            _ => String::new(),
+        }
+    }
+
     /// The value in the study (the neutral 1 or 0 for relative parameters).
     pub fn read(&self, scenario: &Scenario, robot: &RobotSpec) -> f64 {
         match self.target {
             Target::Gain(gain) => scenario.controller.as_ref().map_or(0.0, |c| c.gain(gain)),
             Target::PlatformVelocity => scenario.platform_velocity,
-            Target::Compensation(key) => (scenario.compensation.as_ref())
+            Target::Compensation(i, key) => (scenario.compensation.get(i))
                 .and_then(|c| c.stated_model(robot, &scenario.file).ok())
                 .map_or(f64::NAN, |model| model.get(key.name)),
-            Target::CompensationError(key) => (scenario.compensation.as_ref())
+            Target::CompensationError(i, key) => (scenario.compensation.get(i))
                 .and_then(|c| c.error.get(key.name).copied())
                 .unwrap_or(0.0),
             Target::Observer(key) => scenario.observer.map_or(f64::NAN, |o| o.get(key)),
@@ -375,8 +396,8 @@ impl Parameter {
         match self.target {
             Target::Gain(_)
             | Target::PlatformVelocity
-            | Target::Compensation(_)
-            | Target::CompensationError(_)
+            | Target::Compensation(..)
+            | Target::CompensationError(..)
             | Target::Observer(_)
             | Target::Reference(_) => f64::NAN,
             Target::Alpha | Target::Beta => 1.0,
@@ -404,11 +425,11 @@ impl Parameter {
                 Gain::C => c.c,
                 Gain::KI => c.k_i,
             }),
-            Target::Compensation(key) => (model.compensation.as_ref())
+            Target::Compensation(i, key) => (model.compensation.get(i))
                 .and_then(|c| c.stated_model(model.robot(), std::path::Path::new("")).ok())
                 .map(|stated| stated.get(key.name)),
-            Target::CompensationError(key) => {
-                (model.compensation.as_ref()).map(|c| c.error.get(key.name).copied().unwrap_or(0.0))
+            Target::CompensationError(i, key) => {
+                (model.compensation.get(i)).map(|c| c.error.get(key.name).copied().unwrap_or(0.0))
             }
             Target::Observer(key) => model.observer.map(|o| o.get(key)),
             Target::PlatformVelocity
@@ -442,13 +463,13 @@ impl Parameter {
                 }
             }
             Target::PlatformVelocity => scenario.platform_velocity = value,
-            Target::Compensation(key) => {
-                if let Some(c) = scenario.compensation.as_mut() {
+            Target::Compensation(i, key) => {
+                if let Some(c) = scenario.compensation.get_mut(i) {
                     c.values.insert(key.name, value);
                 }
             }
-            Target::CompensationError(key) => {
-                if let Some(c) = scenario.compensation.as_mut() {
+            Target::CompensationError(i, key) => {
+                if let Some(c) = scenario.compensation.get_mut(i) {
                     c.error.insert(key.name, value);
                 }
             }
@@ -487,8 +508,8 @@ impl Parameter {
         match self.target {
             Target::Gain(_)
             | Target::PlatformVelocity
-            | Target::Compensation(_)
-            | Target::CompensationError(_)
+            | Target::Compensation(..)
+            | Target::CompensationError(..)
             | Target::Observer(_)
             | Target::Reference(_) => {}
             Target::Alpha => {
@@ -654,19 +675,31 @@ fn resolve_target(path: &str, scenario: &Scenario, robot: &RobotSpec) -> Result<
     element_target(name, key, robot).map_err(|(at, message)| scenario.error(at, message))
 }
 
-/// The target of `compensation.<key>` or `compensation.error.<key>`.
+/// The target of `compensation.<key>` or `compensation.error.<key>` (the
+/// one compensator), or of `compensation.<element>.<key>` or
+/// `compensation.<element>.error.<key>` (the one that models `<element>`).
 fn compensation_target(rest: &str, scenario: &Scenario) -> Result<Target, String> {
-    let Some(compensation) = &scenario.compensation else {
+    if scenario.compensation.is_empty() {
         return Err("the scenario has no [compensation] (or its kind is none)".into());
+    }
+    let named = (scenario.compensation.iter().enumerate()).find_map(|(i, c)| {
+        let element = c.element.as_deref()?;
+        Some((i, rest.strip_prefix(element)?.strip_prefix('.')?))
+    });
+    let (index, rest) = match named {
+        Some(found) => found,
+        None if scenario.compensation.len() == 1 => (0, rest),
+        None => {
+            let elements: Vec<&str> = (scenario.compensation.iter())
+                .filter_map(|c| c.element.as_deref())
+                .collect();
+            return Err(format!(
+                "the scenario has several compensators: name the element, compensation.<element>.{rest} (elements: {})",
+                elements.join(", ")
+            ));
+        }
     };
-    let kind: CompensationKind = compensation.kind;
-    // `compensation.<element>.<key>`: the element the compensator models
-    // may be named, as a study of several compensators would.
-    let rest = compensation
-        .element
-        .as_deref()
-        .and_then(|element| rest.strip_prefix(element)?.strip_prefix('.'))
-        .unwrap_or(rest);
+    let kind: CompensationKind = scenario.compensation[index].kind;
     let (name, relative) = match rest.strip_prefix("error.") {
         Some(name) => (name, true),
         None => (rest, false),
@@ -680,9 +713,9 @@ fn compensation_target(rest: &str, scenario: &Scenario) -> Result<Target, String
         )
     })?;
     Ok(if relative {
-        Target::CompensationError(key)
+        Target::CompensationError(index, key)
     } else {
-        Target::Compensation(key)
+        Target::Compensation(index, key)
     })
 }
 

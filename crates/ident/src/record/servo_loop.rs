@@ -87,6 +87,13 @@ impl ServoLoop {
         let x0 = initial_state(model, &loaded.scenario)?;
         check_one_to_one(model, controller, &x0).map_err(refuse)?;
         let (compact, servo_indices) = compact(controller);
+        if servo_indices.len() > MAX_SERVO_STATES {
+            return Err(refuse(format!(
+                "closed-loop identification follows a servo of at most {MAX_SERVO_STATES} states \
+                 (integral, one compensator, observer); this one has {}",
+                servo_indices.len()
+            )));
+        }
         Ok(Self {
             source,
             controller: compact,
@@ -160,7 +167,7 @@ fn compact(controller: &Controller) -> (Controller, Vec<usize>) {
     if let Some(i) = out.integral_index.as_mut() {
         renumber(i, 1);
     }
-    if let Some(f) = out.feedforward.as_mut() {
+    for f in out.feedforward.iter_mut() {
         let n = f.n_states();
         renumber(&mut f.state_index, n);
     }

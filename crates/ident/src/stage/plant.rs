@@ -80,7 +80,7 @@ impl StagePlant {
         let mut scenario = scenario.clone();
         if drive == Loop::Open {
             scenario.controller = None;
-            scenario.compensation = None;
+            scenario.compensation.clear();
             scenario.observer = None;
             scenario.platform_velocity = 0.0;
         } else if scenario.controller.is_none() {

@@ -17,6 +17,21 @@
 //! nominal_mass = 1.5             # kg, the nominal plant 1 / (m s^2)
 //! ```
 //!
+//! A stage with several friction elements takes one compensator per element,
+//! as an array of tables, each as above and each naming its element (the
+//! single table is the one-entry case):
+//!
+//! ```toml
+//! [[compensation]]
+//! kind = "lugre"
+//! element = "friction_fl"
+//!
+//! [[compensation]]
+//! kind = "lugre"
+//! element = "friction_fr"
+//! error = { f_c = 0.4 }
+//! ```
+//!
 //! The compensator's model is the element's parameters, then the explicit
 //! values, then the relative errors (`value * (1 + error)`). A Dahl model
 //! taken from a LuGre element starts from `sigma = sigma0`, the element's
@@ -39,6 +54,11 @@ use crate::error::LoadError;
 use crate::lugre::LugreParams;
 use crate::robot::RobotSpec;
 use crate::rule::Rule;
+
+/// The most compensators one servo carries: one per friction element of the
+/// eight-bearing stage. The servo's values hold their states in fixed arrays
+/// of this size (no allocation in an evaluation).
+pub const MAX_COMPENSATORS: usize = 8;
 
 /// Which friction model the feedforward compensator simulates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -226,12 +246,80 @@ fn number(path: &str, value: &toml::Value) -> Result<f64, String> {
     }
 }
 
-/// Reads `[compensation]` key by key; `Ok(None)` for `kind = "none"`. An
-/// error is (key path, message).
-pub(crate) fn read_compensation(
+/// Reads `[compensation]` or `[[compensation]]`: the compensators in file
+/// order, without those of kind `none`. Several must each name a distinct
+/// friction element (their parameters are addressed by it). An error is
+/// (key path, message).
+pub(crate) fn read_compensations(
+    value: &toml::Value,
+) -> Result<Vec<CompensationSettings>, (String, String)> {
+    let entries: Vec<(String, &toml::Table)> = match value {
+        toml::Value::Table(table) => vec![("compensation".to_string(), table)],
+        toml::Value::Array(entries) => (entries.iter().enumerate())
+            .map(|(i, entry)| match entry {
+                toml::Value::Table(table) => Ok((format!("compensation[{}]", i + 1), table)),
+                other => Err((
+                    format!("compensation[{}]", i + 1),
+                    format!("must be a table, got {}", other.type_str()),
+                )),
+            })
+            .collect::<Result<_, _>>()?,
+        other => {
+            return Err((
+                "compensation".into(),
+                format!(
+                    "must be a table or an array of tables, got {}",
+                    other.type_str()
+                ),
+            ));
+        }
+    };
+    let mut compensators: Vec<(String, CompensationSettings)> = Vec::new();
+    for (prefix, table) in entries {
+        if let Some(settings) = read_compensation(table, &prefix)? {
+            compensators.push((prefix, settings));
+        }
+    }
+    if compensators.len() > MAX_COMPENSATORS {
+        return Err((
+            "compensation".into(),
+            format!(
+                "{} compensators, and a servo carries at most {MAX_COMPENSATORS}",
+                compensators.len()
+            ),
+        ));
+    }
+    if compensators.len() > 1 {
+        for (i, (prefix, settings)) in compensators.iter().enumerate() {
+            let Some(element) = &settings.element else {
+                return Err((
+                    format!("{prefix}.element"),
+                    "missing: with several compensators each names the friction element it models"
+                        .into(),
+                ));
+            };
+            let earlier = compensators[..i]
+                .iter()
+                .find(|(_, other)| other.element.as_ref() == Some(element));
+            if let Some((first, _)) = earlier {
+                return Err((
+                    format!("{prefix}.element"),
+                    format!("\"{element}\" is already compensated by {first}"),
+                ));
+            }
+        }
+    }
+    Ok(compensators.into_iter().map(|(_, s)| s).collect())
+}
+
+/// Reads one compensator's table key by key; `Ok(None)` for `kind =
+/// "none"`. Key paths start with `prefix` (`compensation` or
+/// `compensation[2]`).
+fn read_compensation(
     table: &toml::Table,
+    prefix: &str,
 ) -> Result<Option<CompensationSettings>, (String, String)> {
-    let at = |key: &str, message: String| (format!("compensation.{key}"), message);
+    let at = |key: &str, message: String| (format!("{prefix}.{key}"), message);
     let kind = match table.get("kind") {
         None => return Err(at("kind", "missing: none, lugre or dahl".into())),
         Some(toml::Value::String(kind)) => match kind.as_str() {
@@ -308,7 +396,7 @@ pub(crate) fn read_compensation(
             }
             ("error", toml::Value::Table(errors)) => {
                 for (name, value) in errors {
-                    let path = format!("compensation.error.{name}");
+                    let path = format!("{prefix}.error.{name}");
                     let model_key = kind.key(name).ok_or_else(|| {
                         (
                             path.clone(),
@@ -346,7 +434,7 @@ pub(crate) fn read_compensation(
                         ),
                     )
                 })?;
-                let path = format!("compensation.{name}");
+                let path = format!("{prefix}.{name}");
                 let value = number(&path, value).map_err(|m| (path.clone(), m))?;
                 model_key
                     .rule

@@ -32,7 +32,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use crate::compensation::{
-    CompensationSettings, ObserverSettings, read_compensation, read_observer,
+    CompensationSettings, ObserverSettings, read_compensations, read_observer,
 };
 use crate::error::LoadError;
 use crate::reference::{MoveProfile, Reference};
@@ -52,8 +52,9 @@ struct ScenarioFile {
     #[serde(default)]
     platform: PlatformFile,
     controller: Option<ControllerSettings>,
-    /// Read key by key (see [`crate::compensation`]).
-    compensation: Option<toml::Table>,
+    /// `[compensation]` or `[[compensation]]`, read key by key (see
+    /// [`crate::compensation`]).
+    compensation: Option<toml::Value>,
     /// Read key by key (see [`crate::compensation`]).
     dob: Option<toml::Table>,
     /// Read key by key (see `Checker::reference`), so that an error
@@ -477,8 +478,9 @@ pub struct Scenario {
     pub platform_velocity: f64,
     /// Servo controller, if any.
     pub controller: Option<ControllerSettings>,
-    /// Feedforward friction compensation in the servo, if any.
-    pub compensation: Option<CompensationSettings>,
+    /// Feedforward friction compensators in the servo, in file order (one
+    /// per friction element at most; empty: none).
+    pub compensation: Vec<CompensationSettings>,
     /// Disturbance observer in the servo, if any (`[dob]`).
     pub observer: Option<ObserverSettings>,
     /// Reference for the controller.
@@ -563,8 +565,8 @@ impl Scenario {
             }
         }
         let compensation = match &raw.compensation {
-            Some(table) => read_compensation(table).map_err(|(key, m)| checker.error(&key, m))?,
-            None => None,
+            Some(value) => read_compensations(value).map_err(|(key, m)| checker.error(&key, m))?,
+            None => Vec::new(),
         };
         let observer = match &raw.dob {
             Some(table) => Some(read_observer(table).map_err(|(key, m)| checker.error(&key, m))?),
@@ -572,7 +574,7 @@ impl Scenario {
         };
         if raw.controller.is_none() {
             let table = [
-                ("compensation", compensation.is_some()),
+                ("compensation", !compensation.is_empty()),
                 ("dob", observer.is_some()),
             ];
             if let Some((key, _)) = table.iter().find(|(_, present)| *present) {

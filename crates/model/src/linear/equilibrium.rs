@@ -99,12 +99,10 @@ impl Model {
         // they rest where they start; otherwise they balance like the rest,
         // except a state whose rate depends on no unknown (a model driven by
         // a reference at rest), which rests too.
-        let compensator: Vec<usize> = self.feedforward_states().map_or(Vec::new(), |states| {
-            let tangent = self.tangent(&x);
-            states
-                .filter_map(|i| tangent_index(&tangent, &self.structure.layout.names[i]))
-                .collect()
-        });
+        let tangent = self.tangent(&x);
+        let compensator: Vec<usize> = (self.feedforward_states())
+            .filter_map(|i| tangent_index(&tangent, &self.structure.layout.names[i]))
+            .collect();
         let mut ws = self.workspace();
         let mut f = vec![0.0; self.n_states()];
         let mut last_step = f64::INFINITY;
@@ -197,10 +195,11 @@ impl Model {
 }
 
 impl Model {
-    /// The states of the feedforward compensator, if the servo has one.
-    fn feedforward_states(&self) -> Option<std::ops::Range<usize>> {
-        let feedforward = self.structure.controller.as_ref()?.feedforward.as_ref()?;
-        Some(feedforward.state_index..feedforward.state_index + feedforward.n_states())
+    /// The states of the feedforward compensators, in servo order.
+    fn feedforward_states(&self) -> impl Iterator<Item = usize> + '_ {
+        (self.structure.controller.iter())
+            .flat_map(|c| &c.feedforward)
+            .flat_map(|f| f.state_index..f.state_index + f.n_states())
     }
 }
 

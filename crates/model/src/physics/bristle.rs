@@ -5,7 +5,7 @@
 //! ([`crate::LugreOf::implicit_stage`]). Every evaluation path reads the
 //! bristle law through [`BristleStage::law`], and a feedforward
 //! compensator's LuGre model through [`BristleStage::compensator_law`], so
-//! the two treatments cannot drift apart. The compensator's bristle equation
+//! the two treatments cannot drift apart. A compensator's bristle equation
 //! is linear in its state for the reference (or virtual bearing) velocity of
 //! the stage, so it is solved the same way; a Dahl model (nonlinear in its
 //! state for exponents other than 1) stays explicit.
@@ -22,17 +22,19 @@ pub struct BristleStage<S: Scalar = f64> {
     step: Option<S>,
     /// The solved bristle state of each contact (implicit stages only).
     solved: Vec<S>,
-    /// The solved state of a compensator's LuGre model (implicit stages only).
-    compensator: S,
+    /// The solved state of each compensator's LuGre model (implicit stages
+    /// only; a Dahl model's entry unused).
+    compensators: Vec<S>,
 }
 
 impl<S: Scalar> BristleStage<S> {
-    /// Explicit treatment for `contacts` contacts.
-    pub(crate) fn explicit(contacts: usize) -> Self {
+    /// Explicit treatment for `contacts` contacts and `compensators`
+    /// compensators.
+    pub(crate) fn explicit(contacts: usize, compensators: usize) -> Self {
         Self {
             step: None,
             solved: vec![S::zero(); contacts],
-            compensator: S::zero(),
+            compensators: vec![S::zero(); compensators],
         }
     }
 
@@ -51,15 +53,21 @@ impl<S: Scalar> BristleStage<S> {
         }
     }
 
-    /// Force and state rate of a compensator's friction `model` at velocity
-    /// `v`, where `w` is the state's entry (the explicit part of the stage
-    /// for a LuGre model at an implicit stage).
+    /// Force and state rate of compensator `k`'s friction `model` at
+    /// velocity `v`, where `w` is the state's entry (the explicit part of the
+    /// stage for a LuGre model at an implicit stage).
     #[inline]
-    pub(crate) fn compensator_law(&mut self, model: &FrictionModel, v: S, w: S) -> (S, S) {
+    pub(crate) fn compensator_law(
+        &mut self,
+        k: usize,
+        model: &FrictionModel,
+        v: S,
+        w: S,
+    ) -> (S, S) {
         match (model, self.step) {
             (FrictionModel::Lugre(p), Some(step)) => {
                 let (force, rate, solved) = crate::LugreOf::constant(p).implicit_stage(v, w, step);
-                self.compensator = solved;
+                self.compensators[k] = solved;
                 (force, rate)
             }
             _ => model.force_and_rate(v, w),
@@ -76,9 +84,9 @@ impl<S: Scalar> BristleStage<S> {
         &self.solved
     }
 
-    /// The solved state of the compensator's LuGre model of the last
-    /// implicit evaluation.
-    pub(crate) fn solved_compensator(&self) -> S {
-        self.compensator
+    /// The solved state of each compensator's model of the last implicit
+    /// evaluation, by compensator (meaningful for LuGre models).
+    pub(crate) fn solved_compensators(&self) -> &[S] {
+        &self.compensators
     }
 }

@@ -123,7 +123,10 @@ impl Structure {
                 .collect(),
             generalized: vec![S::zero(); nv],
             rooted,
-            bristles: crate::bristle::BristleStage::explicit(nf),
+            bristles: crate::bristle::BristleStage::explicit(
+                nf,
+                self.controller.as_ref().map_or(0, |c| c.feedforward.len()),
+            ),
             elements: ElementValues {
                 friction_force: vec![S::zero(); nf],
                 slip_velocity: vec![S::zero(); nf],
@@ -225,8 +228,13 @@ impl Structure {
         if let Some(controller) = &self.controller {
             put(inputs.reference_position);
             put(e.servo.error);
-            if controller.feedforward.is_some() {
+            if !controller.feedforward.is_empty() {
                 put(e.servo.feedforward);
+            }
+            if controller.feedforward.len() > 1 {
+                for force in &e.servo.compensator_forces[..controller.feedforward.len()] {
+                    put(*force);
+                }
             }
             if controller.observer.is_some() {
                 put(e.servo.estimate);

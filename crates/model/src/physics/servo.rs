@@ -33,6 +33,7 @@ impl Feedforward {
     #[inline(always)]
     fn force_and_rates<S: Scalar>(
         &self,
+        k: usize,
         x: &[S],
         inputs: &InputValues<S>,
         bristles: &mut BristleStage<S>,
@@ -41,14 +42,14 @@ impl Feedforward {
         let v_r = inputs.reference_velocity;
         match &self.bearing {
             None => {
-                let (force, rate) = bristles.compensator_law(&self.model, v_r, x[i]);
+                let (force, rate) = bristles.compensator_law(k, &self.model, v_r, x[i]);
                 (force, [rate, S::zero(), S::zero()])
             }
             Some(bearing) => {
                 let (deflection, velocity, w) = (x[i], x[i + 1], x[i + 2]);
                 let deflection_rate = v_r - velocity;
                 let slip = velocity - inputs.platform_velocity;
-                let (friction, w_rate) = bristles.compensator_law(&self.model, slip, w);
+                let (friction, w_rate) = bristles.compensator_law(k, &self.model, slip, w);
                 let pull = S::constant(bearing.stiffness) * deflection
                     + S::constant(bearing.damping) * deflection_rate;
                 let acceleration = (pull - friction) * S::constant(1.0 / bearing.mass);
@@ -59,22 +60,6 @@ impl Feedforward {
 }
 
 impl Controller {
-    /// The servo's own states in the order of [`ServoValues`]'s rates.
-    fn state_slots(&self) -> [Option<usize>; 5] {
-        let feedforward = |k: usize| {
-            (self.feedforward.as_ref())
-                .filter(|f| k < f.n_states())
-                .map(|f| f.state_index + k)
-        };
-        [
-            self.integral_index,
-            feedforward(0),
-            feedforward(1),
-            feedforward(2),
-            self.observer.as_ref().map(|o| o.state_index),
-        ]
-    }
-
     /// The servo law at a sensor reading and rate: the actuator force and
     /// the values of [`ServoValues`]. `x` holds the servo's own states at
     /// the indices the controller names (the model's state vector, or any
@@ -92,11 +77,11 @@ impl Controller {
             velocity,
             x,
             inputs,
-            &mut BristleStage::explicit(0),
+            &mut BristleStage::explicit(0, self.feedforward.len()),
         )
     }
 
-    /// [`Controller::law`] with the compensator's model read through the
+    /// [`Controller::law`] with the compensators' models read through the
     /// evaluation's bristle treatment (see [`BristleStage::compensator_law`]).
     #[inline(always)]
     pub(crate) fn law_at_stage<S: Scalar>(
@@ -112,23 +97,24 @@ impl Controller {
         let integral = self.integral_index.map_or(S::zero(), |i| x[i]);
         let mut values = ServoValues::zero();
         values.error = error;
-        values.rates[0] = error;
+        values.integral_rate = error;
         let mut command = -(S::constant(self.k) * error
             + S::constant(self.c) * error_rate
             + S::constant(self.k_i) * integral);
-        if let Some(feedforward) = &self.feedforward {
-            let (force, rates) = feedforward.force_and_rates(x, inputs, bristles);
-            values.feedforward = force;
-            values.rates[1..4].copy_from_slice(&rates);
-            command += force;
+        for (k, feedforward) in self.feedforward.iter().enumerate() {
+            let (force, rates) = feedforward.force_and_rates(k, x, inputs, bristles);
+            values.compensator_forces[k] = force;
+            values.compensator_rates[k] = rates;
+            values.feedforward += force;
         }
+        command += values.feedforward;
         let mut force = command;
         if let Some(observer) = &self.observer {
             let cutoff = S::constant(observer.cutoff);
             let estimate =
                 x[observer.state_index] + cutoff * S::constant(observer.nominal_mass) * velocity;
             values.estimate = estimate;
-            values.rates[4] = -cutoff * command;
+            values.observer_rate = -cutoff * command;
             force = command - estimate;
         }
         (force, values)
@@ -137,30 +123,32 @@ impl Controller {
     /// Writes the rates of the servo's own states into `dx`.
     #[inline(always)]
     pub(crate) fn write_rates<S: Scalar>(&self, values: &ServoValues<S>, dx: &mut [S]) {
-        // The slots of [`Self::state_slots`], read straight off the
-        // controller: this runs in every evaluation.
         if let Some(index) = self.integral_index {
-            dx[index] = values.rates[0];
+            dx[index] = values.integral_rate;
         }
-        if let Some(feedforward) = &self.feedforward {
+        for (feedforward, rates) in self.feedforward.iter().zip(&values.compensator_rates) {
             let (start, count) = (feedforward.state_index, feedforward.n_states());
-            dx[start..start + count].copy_from_slice(&values.rates[1..1 + count]);
+            dx[start..start + count].copy_from_slice(&rates[..count]);
         }
         if let Some(observer) = &self.observer {
-            dx[observer.state_index] = values.rates[4];
+            dx[observer.state_index] = values.observer_rate;
         }
     }
 
-    /// The servo's own states and their rates: (state index, rate).
+    /// The servo's own states and their rates: (state index, rate), in the
+    /// order integral, each compensator's states, observer.
     pub fn state_rates<S: Scalar>(
         &self,
         values: &ServoValues<S>,
     ) -> impl Iterator<Item = (usize, S)> + '_ {
-        let rates = values.rates;
-        self.state_slots()
-            .into_iter()
-            .zip(rates)
-            .filter_map(|(slot, rate)| slot.map(|i| (i, rate)))
+        let integral = (self.integral_index).map(|i| (i, values.integral_rate));
+        let compensators = (self.feedforward.iter().zip(values.compensator_rates)).flat_map(
+            |(feedforward, rates)| {
+                (0..feedforward.n_states()).map(move |j| (feedforward.state_index + j, rates[j]))
+            },
+        );
+        let observer = (self.observer.as_ref()).map(|o| (o.state_index, values.observer_rate));
+        integral.into_iter().chain(compensators).chain(observer)
     }
 }
 
@@ -171,20 +159,20 @@ mod tests {
     use crate::lugre::LugreParams;
 
     /// Every layout of the servo's own states: an integral or none, no
-    /// feedforward, a static one (one state) or one with a virtual bearing
-    /// (three), an observer or none, at scattered indices.
+    /// feedforward, a static one (one state), one with a virtual bearing
+    /// (three) or three compensators, an observer or none, at scattered
+    /// indices.
     fn layouts() -> Vec<Controller> {
+        let bearing = Some(VirtualBearing {
+            mass: 0.1,
+            stiffness: 1e4,
+            damping: 1.0,
+        });
         let feedforwards = [
-            None,
-            Some((None, 4)),
-            Some((
-                Some(VirtualBearing {
-                    mass: 0.1,
-                    stiffness: 1e4,
-                    damping: 1.0,
-                }),
-                6,
-            )),
+            vec![],
+            vec![(None, 4)],
+            vec![(bearing, 6)],
+            vec![(bearing, 3), (None, 7), (bearing, 8)],
         ];
         let mut layouts = Vec::new();
         for integral_index in [None, Some(2)] {
@@ -197,12 +185,14 @@ mod tests {
                         c: 1.0,
                         k_i: if integral_index.is_some() { 1.0 } else { 0.0 },
                         integral_index,
-                        feedforward: feedforward.map(|(bearing, state_index)| Feedforward {
-                            element: None,
-                            model: FrictionModel::Lugre(LugreParams::paper_table1()),
-                            bearing,
-                            state_index,
-                        }),
+                        feedforward: (feedforward.iter())
+                            .map(|(bearing, state_index)| Feedforward {
+                                element: None,
+                                model: FrictionModel::Lugre(LugreParams::paper_table1()),
+                                bearing: *bearing,
+                                state_index: *state_index,
+                            })
+                            .collect(),
                         observer: observer.map(|state_index| Observer {
                             nominal_mass: 1.0,
                             cutoff: 10.0,
@@ -218,7 +208,15 @@ mod tests {
     #[test]
     fn write_rates_writes_exactly_the_listed_state_rates() {
         let mut values = ServoValues::<f64>::zero();
-        values.rates = [1.0, 2.0, 3.0, 4.0, 5.0];
+        values.integral_rate = 1.0;
+        for (k, rates) in values.compensator_rates.iter_mut().enumerate() {
+            *rates = [
+                10.0 * k as f64 + 2.0,
+                10.0 * k as f64 + 3.0,
+                10.0 * k as f64 + 4.0,
+            ];
+        }
+        values.observer_rate = 5.0;
         for controller in layouts() {
             let mut dx = [f64::NAN; 12];
             controller.write_rates(&values, &mut dx);

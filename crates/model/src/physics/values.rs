@@ -2,6 +2,7 @@
 //! ([`InputValues`]), what each force element gave ([`ElementValues`]) and
 //! what the servo law gave besides its force ([`ServoValues`]).
 
+use crate::compensation::MAX_COMPENSATORS;
 use crate::elements::Inputs;
 use crate::reference::ReferenceSample;
 use crate::scalar::Scalar;
@@ -59,18 +60,25 @@ pub struct ElementValues<S = f64> {
 }
 
 /// What the servo law gives besides its force: the tracking error, the
-/// compensators' contributions, and the rates of the servo's own states in
-/// the order integral, feedforward, observer.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+/// compensators' contributions, and the rates of the servo's own states
+/// (integral, each compensator's, observer). Fixed arrays of
+/// [`MAX_COMPENSATORS`] entries: an evaluation allocates nothing.
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ServoValues<S> {
     /// Tracking error x - x_r, m.
     pub error: S,
-    /// Feedforward friction compensation force, N.
+    /// Feedforward friction compensation force, all compensators, N.
     pub feedforward: S,
+    /// Each compensator's force in the servo's order, N (unused entries zero).
+    pub compensator_forces: [S; MAX_COMPENSATORS],
     /// Disturbance estimate d_hat, N.
     pub estimate: S,
-    /// Rates of the integral, the feedforward states and the observer state.
-    pub(crate) rates: [S; 5],
+    /// Rate of the error integral.
+    pub(crate) integral_rate: S,
+    /// Rates of each compensator's states (its first `n_states` entries).
+    pub(crate) compensator_rates: [[S; 3]; MAX_COMPENSATORS],
+    /// Rate of the observer state.
+    pub(crate) observer_rate: S,
 }
 
 impl<S: Scalar> ServoValues<S> {
@@ -79,8 +87,25 @@ impl<S: Scalar> ServoValues<S> {
         Self {
             error: S::zero(),
             feedforward: S::zero(),
+            compensator_forces: [S::zero(); MAX_COMPENSATORS],
             estimate: S::zero(),
-            rates: [S::zero(); 5],
+            integral_rate: S::zero(),
+            compensator_rates: [[S::zero(); 3]; MAX_COMPENSATORS],
+            observer_rate: S::zero(),
+        }
+    }
+}
+
+impl<S: Default> Default for ServoValues<S> {
+    fn default() -> Self {
+        Self {
+            error: S::default(),
+            feedforward: S::default(),
+            compensator_forces: Default::default(),
+            estimate: S::default(),
+            integral_rate: S::default(),
+            compensator_rates: Default::default(),
+            observer_rate: S::default(),
         }
     }
 }
