@@ -11,7 +11,9 @@
 //! - [`fmi3`]: the FMI 3.0 functions, types and description over the same
 //!   instance (both standards' functions go through one registry of live
 //!   instances and share their call bodies);
-//! - [`package`]: building the `.fmu` archive ([`FmiVersion`] picks the standard).
+//! - [`package`]: building the `.fmu` archive ([`FmiVersion`] picks the standard);
+//! - [`ssp`]: an SSP 1.0 system of the plant's FMU with controller FMUs,
+//!   their connections and parameter values (the `fistage ssp` command).
 //!
 //! Threads: instances are independent (each owns its model, state and FMU
 //! states; the library shares only the set of live instances, locked for the
@@ -51,6 +53,7 @@ pub mod fmi3;
 mod misuse_tests;
 pub mod package;
 mod shared;
+pub mod ssp;
 
 // The FMI 2.0 face and the shared unit where users name them.
 pub use fmi2::{exports, model_description, types};

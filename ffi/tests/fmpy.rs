@@ -340,27 +340,20 @@ fn external_controller_converges_to_the_internal_one() {
     );
 }
 
-/// A plant in a loop of FMUs: the stage's FMU with its gains zero and a PD
-/// controller compiled from C against the official FMI 2.0 headers and
-/// packed as an FMU of its own, connected in an SSP and run by FMPy's
-/// multi-FMU master. The master exchanges values once per communication
-/// step (the controller's force is a step late and held), so the loop
-/// converges to fistage's internal servo at first order as the step shrinks.
-#[test]
-fn a_controller_fmu_closes_the_loop_through_a_multi_fmu_master() {
-    if !support::fmpy_available("a_controller_fmu_closes_the_loop_through_a_multi_fmu_master") {
-        return;
-    }
+/// The PD controller of `ffi/ssp/` compiled against the official FMI 2.0
+/// headers and packed as an FMU of its own (gains zero until a system sets
+/// them).
+fn controller_fmu(folder: &Path) -> Vec<u8> {
+    use std::io::Write;
     let root = support::root();
-    let folder = support::scratch("loop_of_fmus");
-    let controller = folder.join("pd_controller.so");
+    let library = folder.join("pd_controller.so");
     let output = Command::new("cc")
         .args(["-std=c99", "-Wall", "-Werror", "-shared", "-fPIC", "-O2"])
         .arg("-I")
         .arg(support::fmi_headers())
-        .arg(root.join("ffi/tests/c/pd_controller.c"))
+        .arg(root.join("ffi/ssp/pd_controller.c"))
         .arg("-o")
-        .arg(&controller)
+        .arg(&library)
         .output()
         .expect("run the C compiler");
     assert!(
@@ -368,69 +361,146 @@ fn a_controller_fmu_closes_the_loop_through_a_multi_fmu_master() {
         "the controller does not compile against the official headers:\n{}",
         String::from_utf8_lossy(&output.stderr)
     );
-    // The plant: fig05b with FI, its own servo switched off.
-    let text = std::fs::read_to_string(root.join("scenarios/paper/fig05b_fi.toml"))
-        .expect("scenario")
-        .replace("../../robots/", &format!("{}/robots/", root.display()))
-        .replace("k = 6e4", "k = 0.0")
-        .replace("c = 100.0", "c = 0.0");
-    let scenario = folder.join("plant.toml");
-    std::fs::write(&scenario, text).expect("plant scenario");
-    let plant = folder.join("plant.fmu");
-    std::fs::write(
-        &plant,
-        fistage_fmi::build_fmu(&scenario, &support::library()).expect("plant FMU"),
-    )
-    .expect("write the plant FMU");
+    let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    let options = zip::write::SimpleFileOptions::default();
+    let description = std::fs::read(root.join("ffi/ssp/pd_controller.xml")).expect("description");
+    zip.start_file("modelDescription.xml", options)
+        .expect("entry");
+    zip.write_all(&description).expect("write");
+    zip.start_file("binaries/linux64/pd_controller.so", options)
+        .expect("entry");
+    zip.write_all(&std::fs::read(&library).expect("library"))
+        .expect("write");
+    zip.finish().expect("archive").into_inner()
+}
+
+/// Whether the FMU environment's python has libcosimpy (the second SSP
+/// importer): SKIPPED without it, unless `.ci/run` requires it.
+fn libcosim_available(test: &str) -> bool {
+    let found = Command::new(support::python())
+        .args(["-c", "import libcosimpy"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !found {
+        let why = "the FMU environment has no libcosimpy (ffi/tests/python/requirements.txt)";
+        assert!(!support::system_tests_required(), "{test}: {why}");
+        println!("SKIPPED {test} in libcosim: {why}");
+    }
+    found
+}
+
+/// The plant in a system of FMUs: [`fistage_fmi::ssp::build_ssp`] (what
+/// `fistage ssp` runs) packs the Fig. 5b FMU with the PD controller FMU of
+/// `ffi/ssp/`, connected by variable name. The system's parameter bindings
+/// switch the plant's own servo off and give the controller its gains
+/// (they start at zero), so a binding that does not arrive breaks the loop.
+/// FMPy's SSP master and libcosim (`ffi/ssp/run_ssp.py`) exchange values
+/// once per communication step (the force is a step late and held), so
+/// each converges to `fistage run` at first order as the step halves.
+#[test]
+fn an_ssp_system_runs_in_two_importers_and_converges_to_the_native_run() {
+    use fistage_fmi::ssp::{ComponentFile, Connection, Endpoint, ParameterValue, SystemSpec};
+    let test = "an_ssp_system_runs_in_two_importers_and_converges_to_the_native_run";
+    if !support::fmpy_available(test) {
+        return;
+    }
+    let folder = support::scratch("ssp_system");
+    let at = |text: &str| Endpoint::parse(text).expect("endpoint");
+    let connect = |from: &str, to: &str| Connection {
+        from: at(from),
+        to: at(to),
+    };
+    let set = |name: &str, value: &str| ParameterValue {
+        at: at(name),
+        value: value.into(),
+    };
+    let plant =
+        std::fs::read(support::fmu("scenarios/paper/fig05b_fi.toml", &folder)).expect("plant FMU");
+    let spec = SystemSpec {
+        name: "servo_loop".into(),
+        components: vec![
+            ComponentFile {
+                name: "plant".into(),
+                fmu: plant,
+            },
+            ComponentFile {
+                name: "controller".into(),
+                fmu: controller_fmu(&folder),
+            },
+        ],
+        connections: vec![
+            connect("controller.force", "plant.servo_force"),
+            connect("plant.encoder.position", "controller.position"),
+            connect("plant.encoder.velocity", "controller.velocity"),
+        ],
+        parameters: vec![
+            set("plant.controller.k", "0"),
+            set("plant.controller.c", "0"),
+            set("controller.k", "6e4"),
+            set("controller.c", "100"),
+        ],
+        stop_time: Some(0.5),
+    };
+    let ssp = folder.join("servo_loop.ssp");
+    std::fs::write(&ssp, fistage_fmi::ssp::build_ssp(&spec).expect("package")).expect("write");
     let stop = 0.5;
     let native = native_run("scenarios/paper/fig05b_fi.toml", stop);
     let reference = &native["encoder.position"];
     let scale = peak_to_peak(reference);
-    let mut errors = Vec::new();
-    for step in ["2e-4", "1e-4", "5e-5"] {
-        let csv = folder.join(format!("loop_{step}.csv"));
-        support::run_python(
-            "fmpy_checks.py",
-            &[
-                "loop",
-                plant.to_str().unwrap_or_default(),
-                controller.to_str().unwrap_or_default(),
-                csv.to_str().unwrap_or_default(),
-                "--stop",
-                &stop.to_string(),
-                "--step",
-                step,
-            ],
-        );
-        let (names, rows) = support::read_csv(&csv);
-        let time = column(&names, &rows, "time");
-        let position = column(&names, &rows, "encoder.position");
-        // The native run's samples are every millisecond.
-        let every = (1e-3 / step.parse::<f64>().expect("step")).round() as usize;
-        let sampled: Vec<f64> = (every - 1..position.len())
-            .step_by(every)
-            .map(|k| position[k])
-            .collect();
-        assert!(
-            (time[every - 1] - 1e-3).abs() < 1e-9,
-            "first sample at {}",
-            time[every - 1]
-        );
-        let error = max_difference(&sampled, &reference[1..=sampled.len()]);
-        println!("loop of FMUs, h = {step} s: max error {error:.3e} m (p2p {scale:.3e} m)");
-        errors.push(error);
+    let mut importers = vec!["fmpy"];
+    if libcosim_available(test) {
+        importers.push("libcosim");
     }
-    for pair in errors.windows(2) {
-        let ratio = pair[0] / pair[1];
+    let script = support::root().join("ffi/ssp/run_ssp.py");
+    for importer in importers {
+        let mut errors = Vec::new();
+        for step in ["2e-4", "1e-4", "5e-5"] {
+            let csv = folder.join(format!("{importer}_{step}.csv"));
+            support::run_python_file(
+                &script,
+                &[
+                    ssp.to_str().unwrap_or_default(),
+                    csv.to_str().unwrap_or_default(),
+                    "--importer",
+                    importer,
+                    "--stop",
+                    &stop.to_string(),
+                    "--step",
+                    step,
+                ],
+            );
+            let (names, rows) = support::read_csv(&csv);
+            let time = column(&names, &rows, "time");
+            let position = column(&names, &rows, "plant.encoder.position");
+            // The native run's samples are every millisecond.
+            let every = (1e-3 / step.parse::<f64>().expect("step")).round() as usize;
+            assert!(
+                (time[every - 1] - 1e-3).abs() < 1e-9,
+                "{importer}: first sample at {}",
+                time[every - 1]
+            );
+            let sampled: Vec<f64> = (every - 1..position.len())
+                .step_by(every)
+                .map(|k| position[k])
+                .collect();
+            let error = max_difference(&sampled, &reference[1..=sampled.len()]);
+            println!(
+                "SSP in {importer}, h = {step} s: max error {error:.3e} m (p2p {scale:.3e} m)"
+            );
+            errors.push(error);
+        }
+        for pair in errors.windows(2) {
+            let ratio = pair[0] / pair[1];
+            assert!(
+                (1.5..3.0).contains(&ratio),
+                "{importer}: halving the step divides the error by {ratio:.2} (errors {errors:?}): not first order"
+            );
+        }
         assert!(
-            (1.5..3.0).contains(&ratio),
-            "halving the step divides the error by {ratio:.2} (errors {errors:?}): not first order"
+            errors[2] < 0.05 * scale,
+            "{importer}: errors {errors:?} against p2p {scale}"
         );
     }
-    assert!(
-        errors[2] < 0.05 * scale,
-        "errors {errors:?} against p2p {scale}"
-    );
 }
 
 /// Many instances at once: 64 instances of the Fig. 5b FMU, each with its

@@ -26,9 +26,11 @@ pub struct FmuArgs {
     pub fmi_version: String,
 }
 
+/// The FMI library to pack: `named` (`--library`), or the one beside this
+/// program.
 #[cfg(feature = "fmu")]
-fn find_library(args: &FmuArgs) -> anyhow::Result<PathBuf> {
-    if let Some(library) = &args.shared_object {
+pub(crate) fn find_library(named: Option<&PathBuf>) -> anyhow::Result<PathBuf> {
+    if let Some(library) = named {
         if !library.is_file() {
             bail!("--library {}: no such file", library.display());
         }
@@ -52,6 +54,20 @@ fn find_library(args: &FmuArgs) -> anyhow::Result<PathBuf> {
         })
 }
 
+/// Writes an archive whole (its folder made first): the file holds the
+/// complete archive or nothing.
+#[cfg(feature = "fmu")]
+pub(crate) fn write_archive(path: &std::path::Path, bytes: &[u8]) -> anyhow::Result<()> {
+    if let Some(folder) = path.parent()
+        && !folder.as_os_str().is_empty()
+    {
+        std::fs::create_dir_all(folder)
+            .with_context(|| format!("cannot create {}", folder.display()))?;
+    }
+    fistage_model::output::write_whole(path, bytes)
+        .with_context(|| format!("cannot write {}", path.display()))
+}
+
 /// A lean build (without the `fmu` feature) has no FMI library to pack.
 #[cfg(not(feature = "fmu"))]
 pub fn run(_args: &FmuArgs) -> anyhow::Result<()> {
@@ -61,20 +77,13 @@ pub fn run(_args: &FmuArgs) -> anyhow::Result<()> {
 /// Runs the command.
 #[cfg(feature = "fmu")]
 pub fn run(args: &FmuArgs) -> anyhow::Result<()> {
-    let library = find_library(args)?;
+    let library = find_library(args.shared_object.as_ref())?;
     let version = match args.fmi_version.as_str() {
         "3" => fistage_fmi::FmiVersion::Fmi3,
         _ => fistage_fmi::FmiVersion::Fmi2,
     };
     let bytes = fistage_fmi::build_fmu_version(&args.scenario, &library, version)?;
-    if let Some(folder) = args.output.parent()
-        && !folder.as_os_str().is_empty()
-    {
-        std::fs::create_dir_all(folder)
-            .with_context(|| format!("cannot create {}", folder.display()))?;
-    }
-    fistage_model::output::write_whole(&args.output, &bytes)
-        .with_context(|| format!("cannot write {}", args.output.display()))?;
+    write_archive(&args.output, &bytes)?;
     println!(
         "{}: FMI {}.0 FMU (Model Exchange and Co-Simulation), {:.1} MB (library {})",
         args.output.display(),

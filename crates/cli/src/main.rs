@@ -19,6 +19,7 @@ mod progress;
 mod robust;
 mod run;
 mod shell;
+mod ssp;
 mod study;
 mod sweep;
 mod tune;
@@ -64,6 +65,8 @@ enum Command {
     Identify(identify::IdentifyArgs),
     /// Package a scenario as an FMI 2.0 or 3.0 FMU (Model Exchange and Co-Simulation).
     Fmu(fmu::FmuArgs),
+    /// Package the plant's FMU with controller FMUs as an SSP 1.0 system (connections, parameters).
+    Ssp(ssp::SspArgs),
     /// Print the completion script of a shell (bash, zsh, fish, elvish, powershell).
     Completions(shell::CompletionsArgs),
     /// Write man pages: fistage.1 and one per command.
@@ -124,6 +127,7 @@ fn run_command() -> anyhow::Result<()> {
         Command::Tune(args) => tune::run(&args),
         Command::Lyapunov(args) => lyapunov::run(&args),
         Command::Fmu(args) => fmu::run(&args),
+        Command::Ssp(args) => ssp::run(&args),
         Command::Completions(args) => shell::completions(&args, Cli::command()),
         Command::Man(args) => shell::man(&args, Cli::command()),
     }

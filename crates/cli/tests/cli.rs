@@ -506,6 +506,100 @@ fn fmu_packages_a_scenario() {
     assert!(!out.join("other.fmu").exists(), "nothing written on error");
 }
 
+/// `fistage ssp` packs the scenario's FMU with other units as one SSP 1.0
+/// system (here a second stage whose servo reference follows the first
+/// stage's encoder, with gains bound in the system); a connection to a
+/// variable no unit has, a value that breaks the plant's rule, or an unknown
+/// component is an error that names it, and nothing is written.
+#[test]
+fn ssp_packs_a_system_and_refuses_a_wrong_one() {
+    let out = scratch("ssp");
+    std::fs::create_dir_all(&out).expect("scratch");
+    let scenario = repository().join("scenarios/paper/fig05b_fi.toml");
+    let follower = out.join("follower.fmu");
+    let made = fistage()
+        .arg("fmu")
+        .arg(&scenario)
+        .arg("-o")
+        .arg(&follower)
+        .output()
+        .expect("fistage runs");
+    assert!(
+        made.status.success(),
+        "{}",
+        String::from_utf8_lossy(&made.stderr)
+    );
+    let system = out.join("pair.ssp");
+    let ssp = |connect: &str, set: &str, output: &Path| {
+        fistage()
+            .arg("ssp")
+            .arg(&scenario)
+            .arg("--fmu")
+            .arg(format!("follower={}", follower.display()))
+            .args([
+                "--connect",
+                connect,
+                "--set",
+                set,
+                "--set",
+                "follower.controller.c=150",
+            ])
+            .arg("-o")
+            .arg(output)
+            .output()
+            .expect("fistage runs")
+    };
+    let packed = ssp(
+        "plant.encoder.position->follower.reference_position",
+        "plant.controller.k=7e4",
+        &system,
+    );
+    assert!(
+        packed.status.success(),
+        "{}",
+        String::from_utf8_lossy(&packed.stderr)
+    );
+    let bytes = std::fs::read(&system).expect("package written");
+    let text = String::from_utf8_lossy(&bytes);
+    for entry in [
+        "SystemStructure.ssd",
+        "resources/plant.fmu",
+        "resources/follower.fmu",
+    ] {
+        assert!(text.contains(entry), "{entry} in the package");
+    }
+    for (connect, set, expected) in [
+        (
+            "plant.encoder.position->follower.reference_posit",
+            "plant.controller.k=7e4",
+            "component \"follower\" has no variable \"reference_posit\"",
+        ),
+        (
+            "plant.encoder.position->follower.reference_position",
+            "plant.controller.k=-5",
+            "--set plant.controller.k=-5",
+        ),
+        (
+            "plant.encoder.position->pump.flow",
+            "plant.controller.k=7e4",
+            "no component \"pump\"",
+        ),
+        (
+            "plant.encoder.position follower.reference_position",
+            "plant.controller.k=7e4",
+            "write FROM->TO",
+        ),
+    ] {
+        let refused_at = out.join("refused.ssp");
+        let refused = ssp(connect, set, &refused_at);
+        let stderr = String::from_utf8_lossy(&refused.stderr);
+        assert!(!refused.status.success(), "{connect} {set}");
+        assert!(stderr.contains(expected), "{expected}: {stderr}");
+        assert!(!refused_at.exists(), "nothing written on error");
+    }
+    std::fs::remove_dir_all(&out).ok();
+}
+
 /// An output folder holds one complete result: a second run into it is
 /// refused without --force (and changes nothing), and with --force the new
 /// result replaces the old one whole (no plots of the first run beside the

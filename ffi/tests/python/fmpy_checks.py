@@ -113,90 +113,6 @@ def command_external(args):
             out.write(",".join(repr(float(v)) for v in row) + "\n")
 
 
-SSD = """<?xml version="1.0" encoding="UTF-8"?>
-<ssd:SystemStructureDescription version="1.0" name="servo_loop"
-    xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon"
-    xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription">
-  <ssd:System name="servo_loop">
-    <ssd:Elements>
-      <ssd:Component name="plant" source="resources/plant.fmu">
-        <ssd:Connectors>
-          <ssd:Connector name="servo_force" kind="input"><ssc:Real/></ssd:Connector>
-          <ssd:Connector name="encoder.position" kind="output"><ssc:Real/></ssd:Connector>
-          <ssd:Connector name="encoder.velocity" kind="output"><ssc:Real/></ssd:Connector>
-        </ssd:Connectors>
-      </ssd:Component>
-      <ssd:Component name="controller" source="resources/controller.fmu">
-        <ssd:Connectors>
-          <ssd:Connector name="position" kind="input"><ssc:Real/></ssd:Connector>
-          <ssd:Connector name="velocity" kind="input"><ssc:Real/></ssd:Connector>
-          <ssd:Connector name="force" kind="output"><ssc:Real/></ssd:Connector>
-        </ssd:Connectors>
-      </ssd:Component>
-    </ssd:Elements>
-    <ssd:Connections>
-      <ssd:Connection startElement="controller" startConnector="force" endElement="plant" endConnector="servo_force"/>
-      <ssd:Connection startElement="plant" startConnector="encoder.position" endElement="controller" endConnector="position"/>
-      <ssd:Connection startElement="plant" startConnector="encoder.velocity" endElement="controller" endConnector="velocity"/>
-    </ssd:Connections>
-  </ssd:System>
-</ssd:SystemStructureDescription>
-"""
-
-
-CONTROLLER_DESCRIPTION = """<?xml version="1.0" encoding="UTF-8"?>
-<fmiModelDescription fmiVersion="2.0" modelName="pd_controller" guid="{7d1c5e0a-0b6f-4a57-9d3e-pd0controller}"
-    variableNamingConvention="structured" numberOfEventIndicators="0">
-  <CoSimulation modelIdentifier="pd_controller" canHandleVariableCommunicationStepSize="true"/>
-  <ModelVariables>
-    <ScalarVariable name="position" valueReference="0" causality="input" variability="continuous"><Real start="0"/></ScalarVariable>
-    <ScalarVariable name="velocity" valueReference="1" causality="input" variability="continuous"><Real start="0"/></ScalarVariable>
-    <ScalarVariable name="k" valueReference="2" causality="parameter" variability="fixed" initial="exact"><Real start="60000"/></ScalarVariable>
-    <ScalarVariable name="c" valueReference="3" causality="parameter" variability="fixed" initial="exact"><Real start="100"/></ScalarVariable>
-    <ScalarVariable name="reference" valueReference="4" causality="parameter" variability="fixed" initial="exact"><Real start="0"/></ScalarVariable>
-    <ScalarVariable name="force" valueReference="5" causality="output" variability="continuous" initial="calculated"><Real/></ScalarVariable>
-  </ModelVariables>
-  <ModelStructure>
-    <Outputs><Unknown index="6"/></Outputs>
-    <InitialUnknowns><Unknown index="6"/></InitialUnknowns>
-  </ModelStructure>
-</fmiModelDescription>
-"""
-
-
-def command_loop(args):
-    """The plant FMU (gains zero) and the compiled C controller packed as an
-    FMU of its own, in one SSP, run by FMPy's multi-FMU master at a fixed
-    communication step."""
-    import os
-    import tempfile
-    import zipfile
-    from fmpy.ssp.simulation import simulate_ssp
-
-    folder = tempfile.mkdtemp()
-    controller = os.path.join(folder, "controller.fmu")
-    with zipfile.ZipFile(controller, "w") as archive:
-        archive.writestr("modelDescription.xml", CONTROLLER_DESCRIPTION)
-        archive.write(args.controller, "binaries/linux64/pd_controller.so")
-    problems = validate_fmu(controller)
-    if problems:
-        raise SystemExit("the controller FMU does not validate: %s" % problems)
-    ssp = os.path.join(folder, "servo_loop.ssp")
-    with zipfile.ZipFile(ssp, "w") as archive:
-        archive.writestr("SystemStructure.ssd", SSD)
-        archive.write(args.plant, "resources/plant.fmu")
-        archive.write(controller, "resources/controller.fmu")
-    result = simulate_ssp(ssp, stop_time=args.stop, step_size=args.step)
-    shutil.rmtree(folder, ignore_errors=True)
-    with open(args.csv, "w") as out:
-        out.write("time,encoder.position,force\n")
-        for row in result:
-            # A row holds the connectors after the step from its time.
-            t = float(row["time"]) + args.step
-            out.write("%r,%r,%r\n" % (t, float(row["plant.encoder.position"]),
-                                       float(row["controller.force"])))
-
-
 def command_rollback(args):
     """Step, save the state, step on, restore (directly and through bytes), step again."""
     description, folder, slave = open_slave(args.fmu)
@@ -297,12 +213,6 @@ def main():
     p.add_argument("--k", type=float, required=True)
     p.add_argument("--c", type=float, required=True)
     p.add_argument("--outputs", required=True)
-    p = sub.add_parser("loop")
-    p.add_argument("plant")
-    p.add_argument("controller")
-    p.add_argument("csv")
-    p.add_argument("--stop", type=float, required=True)
-    p.add_argument("--step", type=float, required=True)
     p = sub.add_parser("rollback")
     p.add_argument("fmu")
     p.add_argument("--step", type=float, default=1e-3)
@@ -320,7 +230,6 @@ def main():
         "simulate": command_simulate,
         "external": command_external,
         "defaults": command_defaults,
-        "loop": command_loop,
         "rollback": command_rollback,
         "derivatives": command_derivatives,
     }[args.command](args)

@@ -2,9 +2,11 @@
    the official FMI 2.0 headers only: inputs `position` (m) and `velocity`
    (m/s), parameters `k` (N/m), `c` (N s/m) and `reference` (m), output
    `force` = -(k (position - reference) + c velocity), computed from the
-   inputs held at the start of each communication step. The loop-of-FMUs
-   test compiles it, packs it with its model description and lets a
-   multi-FMU master close the stage's servo loop through it. */
+   inputs held at the start of each communication step. Its gains start at
+   zero: the system that holds it sets them (an SSP's parameter bindings).
+   `make_loop.sh` beside it compiles it, packs it with its model description
+   (pd_controller.xml) and lets `fistage ssp` put it in a system with the
+   plant; the SSP test of ffi/tests/fmpy.rs does the same in Rust. */
 #include <stdlib.h>
 #include <string.h>
 
@@ -37,8 +39,6 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
     if (type != fmi2CoSimulation) return NULL;
     Controller *s = calloc(1, sizeof(Controller));
     if (s == NULL) return NULL;
-    s->value[VR_K] = 6e4;
-    s->value[VR_C] = 100.0;
     update(s);
     return s;
 }
