@@ -34,10 +34,33 @@ fn refused(rule: Rule) -> f64 {
 }
 
 /// The scenario's own text with one parameter path set to `value`: a key of
-/// `[controller]`, or of `[overrides.<element>]`.
+/// `[controller]`, of `[overrides.<element>]`, or of a compensator (the one
+/// table, or the `[[compensation]]` entry of `<element>`).
 fn scenario_setting(text: &str, parameter: &Parameter, value: f64) -> String {
     let mut table: toml::Table = text.parse().expect("scenario TOML");
     let path: Vec<&str> = parameter.path().split('.').collect();
+    if let ["compensation", element, rest @ ..] = path.as_slice()
+        && let Some(toml::Value::Array(entries)) = table.get_mut("compensation")
+    {
+        let entry = (entries.iter_mut())
+            .filter_map(toml::Value::as_table_mut)
+            .find(|e| e.get("element").and_then(toml::Value::as_str) == Some(element))
+            .unwrap_or_else(|| panic!("{parameter}: no [[compensation]] of {element}"));
+        let (place, key) = match rest {
+            ["error", key] => (
+                entry
+                    .entry("error")
+                    .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+                    .as_table_mut()
+                    .expect("a table"),
+                *key,
+            ),
+            [key] => (entry, *key),
+            _ => panic!("{parameter} is not a compensator key"),
+        };
+        place.insert(key.to_string(), toml::Value::Float(value));
+        return toml::to_string(&table).expect("TOML out");
+    }
     let (tables, key) = match path.as_slice() {
         ["controller", key] => (vec!["controller"], *key),
         ["overrides", element, key] => (vec!["overrides", *element], *key),
@@ -144,4 +167,9 @@ fn every_fmi_parameter_walks_from_file_and_importer_into_the_model() {
     println!("walked {compensated} and {observed} parameters with compensation");
     assert_eq!(compensated, 3 + 6 + 12 + 6 + 6);
     assert_eq!(observed, 3 + 6 + 12 + 2);
+    // One compensator per bearing: each one's model and errors, by element
+    // (`compensation.friction_fl.error.f_c`).
+    let per_bearing = walk("scenarios/compensation/friction20_traverse_per_bearing.toml");
+    println!("walked {per_bearing} parameters with four compensators");
+    assert_eq!(per_bearing, 3 + 4 * 6 + 4 * 12 + 4 * (6 + 6));
 }

@@ -190,5 +190,45 @@ fn print_elements(model: &Model) {
             c.c,
             c.k_i
         );
+        for feedforward in &c.feedforward {
+            println!("  {}", describe_compensator(feedforward));
+        }
+        if let Some(o) = &c.observer {
+            println!(
+                "  observer: nominal mass {} kg, cut-off {} Hz",
+                o.nominal_mass,
+                // The bandwidth as written (the cut-off is held in rad/s).
+                (o.cutoff / (2.0 * std::f64::consts::PI) * 1e9).round() / 1e9
+            );
+        }
     }
+}
+
+/// One compensator in a line: the element it models, its model's
+/// parameters, and where it acts.
+fn describe_compensator(f: &fistage_model::elements::Feedforward) -> String {
+    use fistage_model::elements::FrictionModel;
+    let model = match &f.model {
+        FrictionModel::Lugre(p) => format!(
+            "lugre sigma0 {} sigma1 {} sigma2 {} f_c {} f_s {} v_s {}",
+            p.sigma0, p.sigma1, p.sigma2, p.f_c, p.f_s, p.v_s
+        ),
+        FrictionModel::Dahl(p) => {
+            format!(
+                "dahl sigma {} f_c {} exponent {}",
+                p.sigma, p.f_c, p.exponent
+            )
+        }
+    };
+    let acts = match &f.bearing {
+        Some(b) => format!(
+            "simulated behind its isolator (bearing {} kg, k {} N/m, c {} N s/m)",
+            b.mass, b.stiffness, b.damping
+        ),
+        None => "fed forward at the table".to_string(),
+    };
+    format!(
+        "compensator of {}: {model}, {acts}",
+        f.element.as_deref().unwrap_or("(no element)")
+    )
 }
