@@ -34,18 +34,25 @@ fn refused(rule: Rule) -> f64 {
 }
 
 /// The scenario's own text with one parameter path set to `value`: a key of
-/// `[controller]`, of `[overrides.<element>]`, or of a compensator (the one
-/// table, or the `[[compensation]]` entry of `<element>`).
+/// `[controller]`, of `[overrides.<element>]`, or of the compensator of
+/// `<element>` (`[compensation]` or its `[[compensation]]` entry).
 fn scenario_setting(text: &str, parameter: &Parameter, value: f64) -> String {
     let mut table: toml::Table = text.parse().expect("scenario TOML");
     let path: Vec<&str> = parameter.path().split('.').collect();
     if let ["compensation", element, rest @ ..] = path.as_slice()
-        && let Some(toml::Value::Array(entries)) = table.get_mut("compensation")
+        && *element != "error"
+        && !rest.is_empty()
     {
-        let entry = (entries.iter_mut())
-            .filter_map(toml::Value::as_table_mut)
-            .find(|e| e.get("element").and_then(toml::Value::as_str) == Some(element))
-            .unwrap_or_else(|| panic!("{parameter}: no [[compensation]] of {element}"));
+        let named =
+            |e: &toml::Table| e.get("element").and_then(toml::Value::as_str) == Some(element);
+        let entry = match table.get_mut("compensation") {
+            Some(toml::Value::Array(entries)) => (entries.iter_mut())
+                .filter_map(toml::Value::as_table_mut)
+                .find(|e| named(e)),
+            Some(toml::Value::Table(one)) => Some(one).filter(|e| named(e)),
+            _ => None,
+        }
+        .unwrap_or_else(|| panic!("{parameter}: no compensator of {element}"));
         let (place, key) = match rest {
             ["error", key] => (
                 entry

@@ -20,8 +20,8 @@
 //! | `overrides.<isolator>.x` (`y`, `z`) | m | finite | attach point |
 //! | `overrides.<actuator or sensor>.x` (`y`, `z`) | m | finite | point |
 //! | `overrides.<link>.mass` | kg | > 0 | link mass (inertia scales with it) |
-//! | `compensation.<model key>` | SI | the model's | a feedforward compensator's model parameter (`sigma0` .. `v_s`; Dahl: `sigma`, `f_c`, `exponent`); also `compensation.<element>.<model key>` |
-//! | `compensation.error.<model key>` | 1 | > -1 | relative error on that parameter; also `compensation.<element>.error.<model key>` |
+//! | `compensation.<element>.<model key>` | SI | the model's | the model parameter of the compensator of `<element>` (`sigma0` .. `v_s`; Dahl: `sigma`, `f_c`, `exponent`); `compensation.<model key>` for a model without an element, or the only compensator |
+//! | `compensation.<element>.error.<model key>` | 1 | > -1 | relative error on that parameter; `compensation.error.<model key>` likewise |
 //! | `dob.bandwidth`, `dob.nominal_mass` | Hz, kg | > 0 | disturbance observer |
 //! | `reference.<number key>` | SI | the key's | a number of `[reference]` (e.g. `tangential_velocity`, `step`) |
 //!
@@ -172,13 +172,14 @@ impl Parameter {
                 push(format!("controller.{}", gain.key()), Target::Gain(gain));
             }
         }
-        // One compensator's parameters are `compensation.<key>`; several
-        // are told apart by their elements, `compensation.<element>.<key>`.
-        let several = scenario.compensation.len() > 1;
+        // A compensator's parameters are named by the element it models,
+        // `compensation.<element>.<key>` (several are told apart so); one
+        // with explicit values and no element is `compensation.<key>`, and
+        // that shorter path also reaches the only compensator of a study.
         for (i, compensation) in scenario.compensation.iter().enumerate() {
-            let prefix = match (&compensation.element, several) {
-                (Some(element), true) => format!("compensation.{element}"),
-                _ => "compensation".to_string(),
+            let prefix = match &compensation.element {
+                Some(element) => format!("compensation.{element}"),
+                None => "compensation".to_string(),
             };
             for key in compensation.kind.keys() {
                 push(
@@ -844,8 +845,8 @@ mod tests {
             .map(|p| p.path().to_string())
             .collect();
         for path in [
-            "compensation.sigma",
-            "compensation.error.f_c",
+            "compensation.bearing_friction.sigma",
+            "compensation.bearing_friction.error.f_c",
             "reference.tangential_velocity",
         ] {
             assert!(paths.iter().any(|p| p == path), "{path} in {paths:?}");
