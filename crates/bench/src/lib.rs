@@ -8,7 +8,8 @@
 //! program's other commands do not carry it: `fistage bench` parses
 //! [`BenchArgs`] and calls [`run`]. Each table is a module: `matched.rs`
 //! (matched-accuracy ratios), `rhs.rs` (right-hand-side cost), `record.rs`
-//! (record fits), `robust.rs` (populations), `fmu.rs` (FMUs through the C
+//! (record fits), `robust.rs` (tolerance analyses), `population.rs`
+//! (stages per CPU-second of simulated populations), `fmu.rs` (FMUs through the C
 //! ABI and FMPy), `python.rs` (the Python package), `peers/` (CVODE and
 //! SciPy); `timing.rs` is how everything is timed.
 //!
@@ -32,6 +33,7 @@
 mod fmu;
 mod matched;
 pub mod peers;
+mod population;
 mod python;
 mod record;
 mod rhs;
@@ -95,6 +97,13 @@ pub struct BenchArgs {
     /// `scenarios/bench/fig06b_40x40.toml`, on one and two threads.
     #[arg(long)]
     pub robust: bool,
+    /// Stages per CPU-second of simulated populations on one and two
+    /// threads: the 1-DOF FI population of
+    /// `scenarios/robust/fig05b_simulated.toml` (4 000 stages), 200 stages
+    /// of the four-bearing population, and the 40 x 40 simulated sweep of
+    /// `scenarios/bench/fig06b_40x40.toml`.
+    #[arg(long)]
+    pub population: bool,
     /// Time the Python package's `Scenario.run()` against the program on
     /// fig05b in one invocation (`--python` names the interpreter; default
     /// `target/py-venv/bin/python`, else `python3`).
@@ -345,6 +354,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         crate::record::coverage_table()?;
         println!();
         return crate::record::stage_coverage_table();
+    }
+    if args.population {
+        return crate::population::population_table();
     }
     if args.robust {
         let scenario = args
