@@ -296,3 +296,31 @@ fn integral_action_lets_staircase_steps_settle() {
     println!("mean settling: k_i = 5e8: {s:.4} s, k_i = 1e8: {w:.4} s");
     assert!(s < w && s > 0.0, "{s} vs {w}");
 }
+
+/// The sensors' readings from the kinematics alone (what a population's
+/// verdict reads at every sample) equal those of the whole evaluation, on
+/// the one-axis FI stage and the 6-DOF four-bearing stage, at states away
+/// from the zero configuration.
+#[test]
+fn sensor_readings_from_the_kinematics_equal_the_whole_evaluations() {
+    for file in [
+        "scenarios/paper/fig05b_fi.toml",
+        "scenarios/coupling/friction20_traverse.toml",
+    ] {
+        let loaded = fistage_tests::load(file);
+        let model = &loaded.model;
+        let mut ws = model.workspace();
+        let mut rng = fistage_tests::SplitMix(11);
+        let mut readings = vec![f64::NAN; model.sensors().len()];
+        for _ in 0..50 {
+            let x: Vec<f64> = (model.zero_state().iter())
+                .map(|x0| x0 + rng.range(-1e-2, 1e-2))
+                .collect();
+            model.evaluate(&x, &fistage_model::Inputs::default(), &mut ws);
+            let whole = ws.elements.sensor_position.clone();
+            model.sensor_positions(&x, &mut readings, &mut ws);
+            assert_eq!(readings, whole, "{file}");
+            assert!(whole.iter().any(|r| r.abs() > 1e-4), "{file}: {whole:?}");
+        }
+    }
+}

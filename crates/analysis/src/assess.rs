@@ -283,9 +283,13 @@ fn steady_peak_to_peak(loaded: &Loaded, engine: &dyn Engine, duration: f64) -> O
         }
         hi - lo
     };
+    // The readings from the kinematics alone: a population evaluates
+    // thousands of samples per stage, and the force elements (the Stribeck
+    // exponential above all) do not move a sensor.
+    let mut readings = vec![0.0; model.sensors().len()];
     let mut tracking = |k: usize, t: f64| {
-        model.evaluate(trajectory.state(k), &excitation.inputs(t), &mut ws);
-        ws.elements.sensor_position[sensor] - excitation.inputs(t).reference.position
+        model.sensor_positions(trajectory.state(k), &mut readings, &mut ws);
+        readings[sensor] - excitation.inputs(t).reference.position
     };
     let last = range(0.75 * duration, duration, &mut tracking);
     let before = range(0.5 * duration, 0.75 * duration, &mut tracking);

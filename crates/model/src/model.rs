@@ -289,6 +289,14 @@ impl Model {
         self.structure.evaluate(x, inputs, ws);
     }
 
+    /// Each sensor's reading at state x, m, in [`Model::sensors`] order
+    /// (`out` has one entry per sensor): what [`Model::evaluate`] leaves in
+    /// `ws.elements.sensor_position`, from the kinematics alone, without
+    /// evaluating a force element.
+    pub fn sensor_positions(&self, x: &[f64], out: &mut [f64], ws: &mut Workspace) {
+        self.structure.sensor_positions(x, out, ws);
+    }
+
     /// The slip velocity of every friction contact at state x, m/s, in
     /// contact order (`out` has one entry per [`Model::frictions`]; extra
     /// entries are left as they are): where one changes sign, the bristle

@@ -199,6 +199,16 @@ impl Structure {
         self.sensors_and_servo(x, inputs, ws);
     }
 
+    /// Each sensor's reading at state x, in sensor order, from the
+    /// kinematics alone (no force element is evaluated).
+    pub(crate) fn sensor_positions(&self, x: &[f64], out: &mut [f64], ws: &mut Workspace) {
+        self.kinematics(x, ws);
+        for (reading, sensor) in out.iter_mut().zip(&self.sensors) {
+            let (point, _) = point_state(Frame::Body(sensor.body), &sensor.point, ws);
+            *reading = point.dot(&sensor.axis) - sensor.zero_offset;
+        }
+    }
+
     /// Writes every output signal (see [`crate::Model::signals`]) at state x.
     pub(crate) fn outputs(&self, x: &[f64], inputs: &Inputs, out: &mut [f64], ws: &mut Workspace) {
         ws.elements.reference = inputs.reference;
