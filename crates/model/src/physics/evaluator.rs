@@ -94,7 +94,13 @@ impl Evaluator {
     ) {
         match self {
             Self::ConstantJacobian(map) => {
-                map.rhs(model, x, inputs, dx, &mut ws.generalized, &mut ws.bristles)
+                let out = (
+                    dx,
+                    &mut ws.generalized[..],
+                    &mut ws.bristles,
+                    &mut ws.elements.servo,
+                );
+                map.rhs(model, x, inputs, out)
             }
             Self::RootedBodies(plan) => plan.rhs(
                 model,

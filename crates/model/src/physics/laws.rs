@@ -164,14 +164,14 @@ pub(crate) fn servo_forces<S: Scalar>(
 ) {
     elements.actuator_force.fill(S::zero());
     if let Some(controller) = &model.controller {
-        let (force, values) = controller.law_at_stage(
+        let force = controller.law_into(
             elements.sensor_position[controller.sensor],
             elements.sensor_velocity[controller.sensor],
             x,
             inputs,
             bristles,
+            &mut elements.servo,
         );
-        elements.servo = values;
         elements.actuator_force[controller.actuator] = force;
     }
     if let Some(a) = model.servo_actuator() {

@@ -92,15 +92,35 @@ impl Controller {
         inputs: &InputValues<S>,
         bristles: &mut BristleStage<S>,
     ) -> (S, ServoValues<S>) {
+        let mut values = ServoValues::zero();
+        let force = self.law_into(position, velocity, x, inputs, bristles, &mut values);
+        (force, values)
+    }
+
+    /// [`Controller::law_at_stage`] writing its values in place: every
+    /// value the servo has is written (a compensator's entries beyond its
+    /// own states, and those of compensators it does not have, are left as
+    /// they are), so an evaluation neither clears nor copies the whole
+    /// [`ServoValues`]. Returns the actuator force.
+    #[inline(always)]
+    pub(crate) fn law_into<S: Scalar>(
+        &self,
+        position: S,
+        velocity: S,
+        x: &[S],
+        inputs: &InputValues<S>,
+        bristles: &mut BristleStage<S>,
+        values: &mut ServoValues<S>,
+    ) -> S {
         let error = position - inputs.reference_position;
         let error_rate = velocity - inputs.reference_velocity;
         let integral = self.integral_index.map_or(S::zero(), |i| x[i]);
-        let mut values = ServoValues::zero();
         values.error = error;
         values.integral_rate = error;
         let mut command = -(S::constant(self.k) * error
             + S::constant(self.c) * error_rate
             + S::constant(self.k_i) * integral);
+        values.feedforward = S::zero();
         for (k, feedforward) in self.feedforward.iter().enumerate() {
             let (force, rates) = feedforward.force_and_rates(k, x, inputs, bristles);
             values.compensator_forces[k] = force;
@@ -117,7 +137,7 @@ impl Controller {
             values.observer_rate = -cutoff * command;
             force = command - estimate;
         }
-        (force, values)
+        force
     }
 
     /// Writes the rates of the servo's own states into `dx`.

@@ -13,7 +13,16 @@ use crate::laws::bushing_force;
 use crate::rooted::RootedScratch;
 use crate::rows::{DYNAMIC, DenseRows, PackedRows, RowTable, SparseRows, dot, most_nonzeros};
 use crate::scalar::Scalar;
-use crate::values::InputValues;
+use crate::values::{InputValues, ServoValues};
+
+/// Where an evaluation writes: the state derivative, then the workspace's
+/// generalized forces, bristle stage and servo values.
+pub(crate) type RhsOut<'a, S> = (
+    &'a mut [S],
+    &'a mut [S],
+    &'a mut BristleStage<S>,
+    &'a mut ServoValues<S>,
+);
 
 /// Constant Jacobian rows of a translational model (row-major, `nv` per row).
 #[derive(Debug, Clone, PartialEq)]
@@ -225,8 +234,9 @@ impl TranslationalMap {
         }
     }
 
-    /// The state derivative; `ws` only supplies scratch space for the
-    /// generalized forces. The rows are those [`SparseTables::choose`]
+    /// The state derivative into `out.0`; the rest of `out` is the
+    /// workspace's scratch (generalized forces, the bristle stage, the
+    /// servo's values). The rows are those [`SparseTables::choose`]
     /// picked: a fixed count of non-zero entries per row, dense rows whose
     /// length is a compile-time constant (fully unrolled products), or each
     /// row's own non-zero entries; the sums are the same but for the products
@@ -236,11 +246,8 @@ impl TranslationalMap {
         model: &Structure,
         x: &[S],
         inputs: &InputValues<S>,
-        dx: &mut [S],
-        generalized: &mut [S],
-        bristles: &mut BristleStage<S>,
+        out: RhsOut<'_, S>,
     ) {
-        let out = (dx, generalized, bristles);
         match (&self.sparse, self.nv) {
             (SparseTables::Two(t), _) => self.rhs_with(&t.by_ref(), model, x, inputs, out),
             (SparseTables::Three(t), _) => self.rhs_with(&t.by_ref(), model, x, inputs, out),
@@ -284,7 +291,7 @@ impl TranslationalMap {
         model: &Structure,
         x: &[S],
         inputs: &InputValues<S>,
-        (dx, generalized, bristles): (&mut [S], &mut [S], &mut BristleStage<S>),
+        (dx, generalized, bristles, servo): RhsOut<'_, S>,
     ) {
         let nv = tables.mass_inverse.columns();
         let nq = model.layout.nq;
@@ -304,14 +311,17 @@ impl TranslationalMap {
         let command = match &model.controller {
             Some(controller) => {
                 let (sensor, rows) = (controller.sensor, &tables.sensor_rows);
-                let (f, values) = controller.law_at_stage(
+                // Written in place in the workspace: the servo's values are
+                // a few hundred bytes, too many to clear or copy each time.
+                let f = controller.law_into(
                     S::constant(self.sensor_offsets[sensor]) + rows.dot(sensor, q),
                     rows.dot(sensor, v),
                     x,
                     inputs,
                     bristles,
+                    servo,
                 );
-                controller.write_rates(&values, dx);
+                controller.write_rates(servo, dx);
                 f
             }
             None => S::zero(),
