@@ -72,36 +72,19 @@ impl Controller {
         x: &[S],
         inputs: &InputValues<S>,
     ) -> (S, ServoValues<S>) {
-        self.law_at_stage(
-            position,
-            velocity,
-            x,
-            inputs,
-            &mut BristleStage::explicit(0, self.feedforward.len()),
-        )
-    }
-
-    /// [`Controller::law`] with the compensators' models read through the
-    /// evaluation's bristle treatment (see [`BristleStage::compensator_law`]).
-    #[inline(always)]
-    pub(crate) fn law_at_stage<S: Scalar>(
-        &self,
-        position: S,
-        velocity: S,
-        x: &[S],
-        inputs: &InputValues<S>,
-        bristles: &mut BristleStage<S>,
-    ) -> (S, ServoValues<S>) {
         let mut values = ServoValues::zero();
-        let force = self.law_into(position, velocity, x, inputs, bristles, &mut values);
+        let mut bristles = BristleStage::explicit(0, self.feedforward.len());
+        let force = self.law_into(position, velocity, x, inputs, &mut bristles, &mut values);
         (force, values)
     }
 
-    /// [`Controller::law_at_stage`] writing its values in place: every
-    /// value the servo has is written (a compensator's entries beyond its
-    /// own states, and those of compensators it does not have, are left as
-    /// they are), so an evaluation neither clears nor copies the whole
-    /// [`ServoValues`]. Returns the actuator force.
+    /// [`Controller::law`] with the compensators' models read through the
+    /// evaluation's bristle treatment (see [`BristleStage::compensator_law`]),
+    /// writing its values in place: every value the servo has is written (a
+    /// compensator's entries beyond its own states, and those of
+    /// compensators it does not have, are left as they are), so an
+    /// evaluation neither clears nor copies the whole [`ServoValues`].
+    /// Returns the actuator force.
     #[inline(always)]
     pub(crate) fn law_into<S: Scalar>(
         &self,
