@@ -4,7 +4,7 @@
 
 use fistage_model::{EquilibriumError, EquilibriumKind, Inputs, JointMotion, Model};
 use nalgebra::{Complex, DMatrix};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::eigen::eigen_decomposition;
@@ -18,7 +18,7 @@ pub enum AnalysisError {
 }
 
 /// Kinetic-energy share of one coordinate in a mode.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Participation {
     /// Coordinate name: `table.x` .. `table.yaw`, or a body on a prismatic or revolute joint.
     pub coordinate: String,
@@ -66,6 +66,24 @@ impl Mode {
             .iter()
             .find(|p| p.coordinate == coordinate)
             .map_or(0.0, |p| p.share)
+    }
+}
+
+impl ModalAnalysis {
+    /// The modes with mechanical content (oscillatory, less than half of the
+    /// eigenvector in the bristle states), unstable ones first, then by
+    /// natural frequency: the ones worth drawing.
+    pub fn mechanical_modes(&self) -> Vec<usize> {
+        let mut order: Vec<usize> = (0..self.modes.len())
+            .filter(|&k| self.modes[k].oscillatory && self.modes[k].bristle_share < 0.5)
+            .collect();
+        order.sort_by(|&a, &b| {
+            let (ma, mb) = (&self.modes[a], &self.modes[b]);
+            (mb.real > 0.0)
+                .cmp(&(ma.real > 0.0))
+                .then(ma.frequency_hz.total_cmp(&mb.frequency_hz))
+        });
+        order
     }
 }
 

@@ -15,6 +15,7 @@ mod lyapunov;
 mod modes;
 
 mod progress;
+mod report;
 
 mod robust;
 mod run;
@@ -67,6 +68,8 @@ enum Command {
     Fmu(fmu::FmuArgs),
     /// Package the plant's FMU with controller FMUs as an SSP 1.0 system (connections, parameters).
     Ssp(ssp::SspArgs),
+    /// Put the pages of several result folders of one study on one HTML page.
+    Report(report::ReportArgs),
     /// Print the completion script of a shell (bash, zsh, fish, elvish, powershell).
     Completions(shell::CompletionsArgs),
     /// Write man pages: fistage.1 and one per command.
@@ -80,14 +83,14 @@ fn main() -> std::process::ExitCode {
     match run_command() {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(error) => {
-            eprintln!("Error: {}", report(&error));
+            eprintln!("Error: {}", error_text(&error));
             std::process::ExitCode::FAILURE
         }
     }
 }
 
 /// An error and its causes as anyhow prints them, without the backtrace.
-fn report(error: &anyhow::Error) -> String {
+fn error_text(error: &anyhow::Error) -> String {
     let mut text = error.to_string();
     let causes: Vec<String> = error.chain().skip(1).map(ToString::to_string).collect();
     match causes.as_slice() {
@@ -128,6 +131,7 @@ fn run_command() -> anyhow::Result<()> {
         Command::Lyapunov(args) => lyapunov::run(&args),
         Command::Fmu(args) => fmu::run(&args),
         Command::Ssp(args) => ssp::run(&args),
+        Command::Report(args) => report::run(&args),
         Command::Completions(args) => shell::completions(&args, Cli::command()),
         Command::Man(args) => shell::man(&args, Cli::command()),
     }

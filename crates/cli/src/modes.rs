@@ -51,6 +51,9 @@ pub struct ModesArgs {
     /// Replace an earlier result in the output folder (as a whole).
     #[arg(long)]
     pub force: bool,
+    /// Skip the HTML page (report.html).
+    #[arg(long)]
+    pub no_report: bool,
 }
 
 /// Runs the command.
@@ -115,6 +118,13 @@ pub fn run(args: &ModesArgs) -> anyhow::Result<()> {
             staging,
         )?);
     }
+    let mut page = Vec::new();
+    if !args.no_report {
+        let reasons: Vec<String> = unavailable.iter().map(|u| u.reason.clone()).collect();
+        page.extend(crate::report::write(staging, || {
+            fistage_report::sections::modes::section(&loaded, &analyses, &reasons)
+        })?);
+    }
     let out_dir = folder.commit()?;
     if args.json {
         println!("{text}");
@@ -127,7 +137,8 @@ pub fn run(args: &ModesArgs) -> anyhow::Result<()> {
         }
         print_routh_hurwitz(&loaded, inputs.platform_velocity);
         println!(
-            "wrote modes.json and {} pictures in {}",
+            "wrote modes.json{} and {} pictures in {}",
+            page.iter().map(|p| format!(", {p}")).collect::<String>(),
             pictures.len(),
             out_dir.display()
         );

@@ -27,6 +27,9 @@ pub struct RunArgs {
     /// Skip the plots.
     #[arg(long)]
     pub no_plots: bool,
+    /// Skip the HTML page (report.html).
+    #[arg(long)]
+    pub no_report: bool,
     /// Engine to use instead of the scenario's (`auto`, `native`, `imex`,
     /// `dop853`, `rk4`, `rosenbrock` or `rapier`).
     #[arg(long)]
@@ -95,6 +98,11 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         written.extend(fistage_plot::figures::run::write(
             &loaded, &output, staging,
         )?);
+    }
+    if !args.no_report {
+        written.extend(crate::report::write(staging, || {
+            fistage_report::sections::run::section(&loaded, &output)
+        })?);
     }
     let out_dir = folder.commit()?;
     print_summary(&loaded, &output);

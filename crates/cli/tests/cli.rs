@@ -5,17 +5,17 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn fistage() -> Command {
+pub(crate) fn fistage() -> Command {
     Command::new(env!("CARGO_BIN_EXE_fistage"))
 }
 
-fn repository() -> PathBuf {
+pub(crate) fn repository() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
 /// Runs `fistage` with these arguments; fails the test with its stderr
 /// unless it succeeds, and gives its stdout.
-fn succeeds<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> String {
+pub(crate) fn succeeds<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> String {
     let output = fistage().args(args).output().expect("fistage runs");
     assert!(
         output.status.success(),
@@ -35,7 +35,7 @@ fn fig05b_for_a_second(extra: &str) -> String {
     )
 }
 
-fn scratch(name: &str) -> PathBuf {
+pub(crate) fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("fistage-cli-{name}-{}", std::process::id()));
     std::fs::remove_dir_all(&dir).ok();
     dir
@@ -1686,7 +1686,7 @@ fn a_fitted_stage_drawn_jointly_differs_from_its_marginals() {
 /// Whether the system tests are required (`.ci/run` sets it): then a
 /// missing system component fails the test instead of skipping it. Hidden
 /// components ([`optional_hidden`]) are never required.
-fn system_tests_required() -> bool {
+pub(crate) fn system_tests_required() -> bool {
     optional_hidden().is_none()
         && std::env::var("FISTAGE_SYSTEM_TESTS").is_ok_and(|v| v == "required")
 }
@@ -1695,7 +1695,7 @@ fn system_tests_required() -> bool {
 /// `FISTAGE_HIDE_OPTIONAL` set to anything but empty or `0`, as `.ci/run`
 /// sets it for one pass that runs every SKIPPED path of a bare machine. The
 /// program honours the same variable.
-fn optional_hidden() -> Option<String> {
+pub(crate) fn optional_hidden() -> Option<String> {
     std::env::var("FISTAGE_HIDE_OPTIONAL")
         .ok()
         .filter(|value| !value.is_empty() && value != "0")

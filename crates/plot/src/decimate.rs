@@ -12,6 +12,7 @@
 
 use std::collections::HashSet;
 
+use crate::axis::{Axis, Scale};
 use crate::coverage::{self, Trace};
 use crate::geometry::{PixelMap, Point};
 
@@ -25,6 +26,19 @@ pub(crate) fn line_trace(points: &[Point], map: &PixelMap) -> Trace {
     } else {
         coverage::trace(points, map)
     }
+}
+
+/// A series with monotonic x reduced for a reader that cannot draw every point (an
+/// interactive plot): per one of `columns` equal columns of the x range, the first, lowest,
+/// highest and last point, so envelopes and extrema survive; the runs between visible gaps
+/// (non-finite values), each in x order. Other series are returned whole, one run.
+pub fn envelope(points: &[(f64, f64)], columns: u32) -> Vec<Vec<(f64, f64)>> {
+    if !is_monotonic(points) {
+        return vec![points.to_vec()];
+    }
+    let x = Axis::fit(Scale::Linear, points.iter().map(|p| p.0), 0.0);
+    let y = Axis::fit(Scale::Linear, points.iter().map(|p| p.1), 0.0);
+    by_column(points, &PixelMap::new(&x, &y, (columns.max(1), 1)))
 }
 
 /// The marker positions to draw: one finite, visible point per pixel cell.
@@ -169,7 +183,36 @@ fn end_run(runs: &mut Vec<Vec<Point>>, run: &mut Vec<Point>) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::axis::{Axis, Scale};
+
+    /// An interactive plot's reduction keeps every column's extremes: a
+    /// 200 000-sample decaying oscillation keeps its first, largest and
+    /// smallest values in at most four points per column, and a gap stays a gap.
+    #[test]
+    fn the_envelope_keeps_the_extremes_in_four_points_per_column() {
+        let mut points: Vec<Point> = (0..200_000)
+            .map(|i| {
+                let t = i as f64 * 1e-5;
+                (
+                    t,
+                    (-t).exp() * (2.0 * std::f64::consts::PI * 317.0 * t).sin(),
+                )
+            })
+            .collect();
+        let (lo, hi) = points
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p.1), hi.max(p.1))
+            });
+        let runs = envelope(&points, 500);
+        assert_eq!(runs.len(), 1);
+        assert!(runs[0].len() <= 4 * 501, "{}", runs[0].len());
+        assert!(runs[0].iter().any(|p| p.1 == lo) && runs[0].iter().any(|p| p.1 == hi));
+        assert_eq!(runs[0][0], points[0]);
+        for p in &mut points[90_000..110_000] {
+            p.1 = f64::NAN;
+        }
+        assert_eq!(envelope(&points, 500).len(), 2);
+    }
 
     /// The polylines of a line trace (these tests never produce a raster).
     fn lines(points: &[Point], map: &PixelMap) -> Vec<Vec<Point>> {

@@ -55,6 +55,7 @@ mod series;
 mod xy;
 
 pub use bode::{BodeSeries, write_bode};
+pub use decimate::envelope;
 pub use error::PlotError;
 pub use figure::{Figure, Panel, write_figure};
 pub use heatmap::{ColourScale, Heatmap};

@@ -10,22 +10,6 @@ use nalgebra::Vector3;
 use super::svg_and_png;
 use crate::{PlotError, Series, XyPlot, write_xy};
 
-/// Modes worth drawing: unstable ones first, then oscillatory modes with
-/// mechanical content, lowest frequency first.
-fn dominant_modes(analysis: &ModalAnalysis, count: usize) -> Vec<usize> {
-    let mut order: Vec<usize> = (0..analysis.modes.len())
-        .filter(|&k| analysis.modes[k].oscillatory && analysis.modes[k].bristle_share < 0.5)
-        .collect();
-    order.sort_by(|&a, &b| {
-        let (ma, mb) = (&analysis.modes[a], &analysis.modes[b]);
-        (mb.real > 0.0)
-            .cmp(&(ma.real > 0.0))
-            .then(ma.frequency_hz.total_cmp(&mb.frequency_hz))
-    });
-    order.truncate(count);
-    order
-}
-
 /// Points of each body seen from above: isolator attach points (and the body
 /// origin), in world coordinates at the equilibrium.
 fn body_points(loaded: &Loaded, state: &[f64]) -> Vec<Vec<Vector3<f64>>> {
@@ -100,7 +84,7 @@ pub fn write(
         .fold(0.0_f64, f64::max)
         .max(1e-3);
     let mut written = Vec::new();
-    for (rank, &k) in dominant_modes(analysis, count).iter().enumerate() {
+    for (rank, &k) in analysis.mechanical_modes().iter().take(count).enumerate() {
         let mode = &analysis.modes[k];
         // Real shape: magnitude x cos(phase), scaled so the largest point moves 15% of the span.
         let shape: Vec<f64> = mode
