@@ -448,3 +448,43 @@ fn circle_and_staircase_references_are_read_and_checked() {
         assert_mentions(&message, needles);
     }
 }
+
+#[test]
+fn a_visual_of_no_size_is_named_and_drawable_visuals_reach_the_model() {
+    let robot = std::fs::read_to_string(path("robots/stage_4fi.urdf")).expect("robot");
+    let bad = robot.replacen(
+        "box size=\"0.15 0.15 0.0165\"",
+        "box size=\"0.15 0 0.0165\"",
+        1,
+    );
+    assert_mentions(
+        &robot_error(&bad),
+        &[
+            "robots/bad.urdf",
+            "link \"table\" visual 1",
+            "positive and finite",
+        ],
+    );
+    // The shipped stage's five boxes, each on the body of its link; a mesh
+    // (not drawable) is left out.
+    let with_mesh = robot.replacen(
+        "<geometry><box size=\"0.15 0.15 0.0165\"/></geometry>\n    </visual>",
+        "<geometry><box size=\"0.15 0.15 0.0165\"/></geometry>\n    </visual>\n    <visual><geometry><mesh filename=\"plate.stl\"/></geometry></visual>",
+        1,
+    );
+    let spec = RobotSpec::from_str(&with_mesh, Path::new("robots/stage_4fi.urdf")).expect("robot");
+    let scenario =
+        Scenario::from_str("robot = \"x\"\nduration = 1\n", Path::new("s.toml")).expect("scenario");
+    let (_, model) = assemble(spec, &scenario).expect("model");
+    assert_eq!(model.visuals().len(), 5);
+    for visual in model.visuals() {
+        let fistage_model::Frame::Body(b) = visual.frame else {
+            panic!("{} is on the world", visual.link);
+        };
+        assert_eq!(model.bodies()[b].name, visual.link);
+    }
+    assert_eq!(
+        model.visuals()[0].shape,
+        fistage_model::VisualShape::Box([0.15, 0.15, 0.0165])
+    );
+}

@@ -34,6 +34,10 @@ class Result:
     def __getitem__(self, name: str) -> numpy.typing.NDArray[numpy.float64]: ...
     def to_pandas(self) -> Any:
         """The signals as a pandas DataFrame indexed by time (needs pandas)."""
+    def report(self, path: Union[str, PathLike]) -> None:
+        """Writes the run's HTML page (as `fistage run` writes report.html)."""
+    def _repr_html_(self) -> str:
+        """The page in Jupyter: the same interactive plots, in a frame."""
 
 class Plant:
     """The stage as an ODE x' = f(t, x) for Python's own integrators (e.g. scipy's solve_ivp)."""

@@ -196,6 +196,7 @@ impl Scenario {
             .map_err(|e| Error::new_err(e.to_string()))?;
         let json = py.import("json")?;
         let summary = json.call_method1("loads", (summary,))?.unbind();
+        let section = fistage_report::sections::run::section(&loaded, &output);
         let table = output.signals;
         let signals = PyDict::new(py);
         let units = PyDict::new(py);
@@ -208,6 +209,7 @@ impl Scenario {
             signals: signals.unbind(),
             units: units.unbind(),
             summary,
+            section,
         })
     }
 
@@ -411,6 +413,8 @@ struct RunResult {
     units: Py<PyDict>,
     #[pyo3(get)]
     summary: Py<PyAny>,
+    /// The run's part of its HTML page.
+    section: fistage_report::Section,
 }
 
 #[pymethods]
@@ -432,6 +436,28 @@ impl RunResult {
 
     fn __repr__(&self, py: Python<'_>) -> String {
         format!("Result({} signals)", self.signals.bind(py).len())
+    }
+
+    /// report(path): writes the run's HTML page (as `fistage run` writes
+    /// report.html): one self-contained file.
+    fn report(&self, path: PathBuf) -> PyResult<()> {
+        fistage_report::write(&self.page(), &path).map_err(|e| Error::new_err(e.to_string()))
+    }
+
+    /// The page in Jupyter: the same plots, in a frame of the notebook.
+    fn _repr_html_(&self) -> PyResult<String> {
+        let html =
+            fistage_report::render(&self.page()).map_err(|e| Error::new_err(e.to_string()))?;
+        Ok(format!(
+            "<iframe srcdoc=\"{}\" style=\"width: 100%; height: 720px; border: none\"></iframe>",
+            html.replace('&', "&amp;").replace('"', "&quot;")
+        ))
+    }
+}
+
+impl RunResult {
+    fn page(&self) -> fistage_report::Page {
+        fistage_report::Page::single(self.section.clone())
     }
 }
 

@@ -149,3 +149,20 @@ def test_ctrl_c_stops_a_long_run(root, ctrl_c):
         long.run()
     timer.join()
     assert time.monotonic() - start < 2.5
+
+
+def test_a_result_shows_its_page_in_jupyter_and_writes_it(root, tmp_path):
+    result = fig05b(root).run()
+    html = result._repr_html_()
+    # One frame holding the whole page: its data and the plots' library, no
+    # script or style sheet to fetch (the browser test opens such pages).
+    assert html.startswith("<iframe srcdoc=") and html.count("<iframe") == 1
+    assert "fistage-report-data" in html and "Plotly" in html
+    assert "<script src=" not in html and "<link " not in html
+    page = tmp_path / "run.html"
+    result.report(page)
+    text = page.read_text()
+    assert text.startswith("<!DOCTYPE html>")
+    # The page's summary table holds the run's statistics.
+    p2p = result.summary["signals"]["encoder.position"]["peak_to_peak"]
+    assert f"{p2p:.3e}".replace("e-05", "e-5") in text

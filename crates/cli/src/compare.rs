@@ -39,6 +39,9 @@ pub struct CompareArgs {
     /// Shards, merging, threads, resume.
     #[command(flatten)]
     pub study: StudyArgs,
+    /// Skip the HTML page (report.html).
+    #[arg(long)]
+    pub no_report: bool,
 }
 
 /// The case of a scenario file.
@@ -129,6 +132,11 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
     let curves = comparison.curves(&rows);
     write_curves(&comparison, &curves, folder.path())?;
     let pictures = fistage_plot::figures::compare::write(&comparison, &curves, folder.path())?;
+    if !args.no_report {
+        crate::report::write(folder.path(), || {
+            fistage_report::sections::compare::section(&comparison, &curves)
+        })?;
+    }
     folder.commit()?;
     report(&comparison, &rows, &curves, &out_dir, &pictures);
     let missing: usize = curves.iter().flat_map(|c| &c.missing).sum();

@@ -34,6 +34,9 @@ pub struct RobustArgs {
     /// Shards, merging, threads, resume.
     #[command(flatten)]
     pub study: StudyArgs,
+    /// Skip the HTML page (report.html).
+    #[arg(long)]
+    pub no_report: bool,
 }
 
 /// Runs the command.
@@ -65,6 +68,11 @@ pub fn run(args: &RobustArgs) -> anyhow::Result<()> {
     std::fs::write(&json, serde_json::to_string_pretty(&summary)? + "\n")
         .with_context(|| format!("cannot write {}", json.display()))?;
     fistage_plot::figures::robust::write(&spec, &results, &summary, folder.path())?;
+    if !args.no_report {
+        crate::report::write(folder.path(), || {
+            fistage_report::sections::robust::section(&loaded, &spec, &results, &summary)
+        })?;
+    }
     folder.commit()?;
     report(&summary, &out_dir);
     Ok(())

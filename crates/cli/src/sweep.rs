@@ -24,6 +24,9 @@ pub struct SweepArgs {
     /// Shards, merging, threads, resume.
     #[command(flatten)]
     pub study: StudyArgs,
+    /// Skip the HTML page (report.html).
+    #[arg(long)]
+    pub no_report: bool,
 }
 
 /// Runs the command.
@@ -53,6 +56,11 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
         &results,
         folder.path(),
     )?;
+    if !args.no_report {
+        crate::report::write(folder.path(), || {
+            fistage_report::sections::sweep::section(&loaded, &spec, &results)
+        })?;
+    }
     folder.commit()?;
     let missing = spec.len() - results.len();
     println!(

@@ -48,6 +48,9 @@ pub struct TuneArgs {
     /// Replace an output folder holding an earlier result.
     #[arg(long)]
     pub force: bool,
+    /// Skip the HTML page (report.html).
+    #[arg(long)]
+    pub no_report: bool,
 }
 
 /// A gain range: LOW,HIGH with 0 < LOW < HIGH, each end a value the gains'
@@ -130,6 +133,11 @@ pub fn run(args: &TuneArgs) -> anyhow::Result<()> {
     });
     bar.finish_and_clear();
     write(&tuning, folder.path())?;
+    if !args.no_report {
+        crate::report::write(folder.path(), || {
+            fistage_report::sections::tune::section(&loaded, &tuning)
+        })?;
+    }
     folder.commit()?;
     report(&tuning, &out_dir);
     Ok(())

@@ -29,6 +29,19 @@ fn chromium() -> Result<PathBuf, String> {
     }
 }
 
+/// Chromium, or None after saying SKIPPED (a failure where the system tests
+/// are required).
+fn browser_or_skip() -> Option<PathBuf> {
+    match chromium() {
+        Ok(path) => Some(path),
+        Err(why) if system_tests_required() => panic!("the browser test needs Chromium: {why}"),
+        Err(why) => {
+            eprintln!("SKIPPED: the browser test: {why}");
+            None
+        }
+    }
+}
+
 /// What the page reported of itself, and what the browser printed.
 fn open(browser: &Path, page: &Path, profile: &Path) -> (serde_json::Value, String) {
     let url = format!("file://{}#selftest", page.display());
@@ -46,7 +59,7 @@ fn open(browser: &Path, page: &Path, profile: &Path) -> (serde_json::Value, Stri
             "--disable-sync",
             "--enable-logging=stderr",
             "--v=0",
-            "--virtual-time-budget=6000",
+            "--virtual-time-budget=10000",
             "--dump-dom",
         ])
         .arg(format!("--user-data-dir={}", profile.display()))
@@ -191,13 +204,8 @@ fn run_fig05b(out: &Path, extra: &[&str]) {
 
 #[test]
 fn report_pages_render_in_a_real_browser_and_show_the_modes_of_modes_json() {
-    let browser = match chromium() {
-        Ok(path) => path,
-        Err(why) if system_tests_required() => panic!("the browser test needs Chromium: {why}"),
-        Err(why) => {
-            eprintln!("SKIPPED: the browser test: {why}");
-            return;
-        }
+    let Some(browser) = browser_or_skip() else {
+        return;
     };
     let dir = scratch("browser");
     let repo = repository();
@@ -247,5 +255,105 @@ fn no_report_skips_the_page_and_report_refuses_a_folder_without_one() {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(stderr.contains("no report.html"), "{stderr}");
     assert!(!dir.join("page.html").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The block of the page's first section with this title.
+fn block<'a>(page: &'a serde_json::Value, title: &str) -> &'a serde_json::Value {
+    page["sections"][0]["blocks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|b| b["title"] == title)
+        .unwrap_or_else(|| panic!("no block {title}"))
+}
+
+/// The leading number of a cell such as `0.9531 (95% interval ...)`.
+fn leading_number(cell: &serde_json::Value) -> f64 {
+    let text = cell.as_str().unwrap();
+    text.split_whitespace().next().unwrap().parse().unwrap()
+}
+
+#[test]
+fn study_and_fit_pages_render_and_carry_the_numbers_of_their_json() {
+    let Some(browser) = browser_or_skip() else {
+        return;
+    };
+    let dir = scratch("browser-studies");
+    let repo = repository();
+    let robust = dir.join("robust");
+    let population = repo.join("scenarios/robust/four_bearing_population.toml");
+    succeeds(&[
+        "robust".as_ref(),
+        population.as_os_str(),
+        "--samples".as_ref(),
+        "32".as_ref(),
+        "--out".as_ref(),
+        robust.as_os_str(),
+    ]);
+    let tune = dir.join("tune");
+    succeeds(&[
+        "tune".as_ref(),
+        population.as_os_str(),
+        "--samples".as_ref(),
+        "8".as_ref(),
+        "--points".as_ref(),
+        "5".as_ref(),
+        "--out".as_ref(),
+        tune.as_os_str(),
+    ]);
+    let record = dir.join("record.csv");
+    succeeds(&[
+        "identify".as_ref(),
+        "simulate-record".as_ref(),
+        repo.join("robots/stage_1dof_rigid.urdf").as_os_str(),
+        "--out".as_ref(),
+        record.as_os_str(),
+    ]);
+    let fit = dir.join("fit");
+    succeeds(&[
+        "identify".as_ref(),
+        "record".as_ref(),
+        record.as_os_str(),
+        "--out".as_ref(),
+        fit.as_os_str(),
+    ]);
+    let profile = dir.join("profile");
+    for folder in [&robust, &tune, &fit] {
+        let page = folder.join("report.html");
+        let (verdict, log) = open(&browser, &page, &profile);
+        assert_rendered(&page, &verdict, &log, 0);
+    }
+    // The population's probability as summary.json has it.
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(robust.join("summary.json")).unwrap())
+            .unwrap();
+    let page = page_data(&robust.join("report.html"));
+    let facts = block(&page, "population");
+    let shown = facts["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|row| row[0] == "P(linearly unstable)")
+        .map(|row| leading_number(&row[1]))
+        .unwrap();
+    let estimate = summary["p_unstable_linear"]["estimate"].as_f64().unwrap();
+    assert!(
+        (shown - estimate).abs() <= 1e-3 * estimate.abs().max(1e-3),
+        "{shown} {estimate}"
+    );
+    // The fitted parameters as fit.json has them.
+    let fitted: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(fit.join("fit.json")).unwrap()).unwrap();
+    let page = page_data(&fit.join("report.html"));
+    for row in block(&page, "parameters")["rows"].as_array().unwrap() {
+        let name = row[0].as_str().unwrap();
+        let value = fitted[name]["value"].as_f64().unwrap();
+        let shown = leading_number(&row[2]);
+        assert!(
+            (shown / value - 1.0).abs() < 1e-3,
+            "{name}: page {shown}, fit.json {value}"
+        );
+    }
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -14,7 +14,7 @@ use crate::elements::{
     Body, Controller, Frame, FrictionContact, Isolator, Joint, JointMotion, MassBlock, PointAxis,
     SignalInfo, StateKind, StateLayout, Structure,
 };
-use crate::elements::{Feedforward, Observer, VirtualBearing};
+use crate::elements::{Feedforward, Observer, VirtualBearing, Visual};
 use crate::error::LoadError;
 use crate::evaluator::Evaluator;
 use crate::model::Model;
@@ -516,6 +516,7 @@ impl<'a> Assembler<'a> {
             (q + b.joint.motion.nq(), v + b.joint.motion.nv())
         });
 
+        let visuals = self.visuals();
         let mut frictions = Vec::new();
         for spec in &robot.frictions {
             let as_point = PointAxisSpec {
@@ -701,7 +702,25 @@ impl<'a> Assembler<'a> {
             notes: std::mem::take(&mut self.notes),
             compensation: scenario.compensation.clone(),
             observer: scenario.observer,
+            visuals,
         })
+    }
+
+    /// Every link's visuals on the body the link merged into.
+    fn visuals(&self) -> Vec<Visual> {
+        let mut visuals = Vec::new();
+        for link in &self.robot.links {
+            let Some(placement) = self.placements.get(link.name.as_str()) else {
+                continue;
+            };
+            visuals.extend(link.visuals.iter().map(|visual| Visual {
+                link: link.name.clone(),
+                frame: placement.frame,
+                origin: placement.link_in_body * visual.origin,
+                shape: visual.shape,
+            }));
+        }
+        visuals
     }
 }
 

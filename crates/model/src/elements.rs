@@ -148,6 +148,20 @@ pub struct Isolator {
     pub attach_is_identity: [bool; 2],
 }
 
+/// A solid of the robot file's `<visual>`s, placed on the body its link
+/// merged into (or on the world, for links welded to it): what a 3D view draws.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Visual {
+    /// The link that declared it.
+    pub link: String,
+    /// The body (or the world) it moves with.
+    pub frame: Frame,
+    /// The solid's frame in the body frame (the world's for [`Frame::World`]).
+    pub origin: Isometry3<f64>,
+    /// The solid.
+    pub shape: crate::robot::VisualShape,
+}
+
 /// A LuGre contact between a body and its counter-surface. The counter-surface
 /// (rail or platform) is fixed to the world and moves along the contact axis at
 /// the platform velocity.

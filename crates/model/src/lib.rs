@@ -88,7 +88,7 @@ pub use assembly::{Loaded, assemble, load};
 pub use dynamics::{ElementValues, EvaluationPath, InputValues, Workspace};
 pub use elements::{
     Body, BodyMotion, BodyWrench, Controller, Frame, FrictionContact, Inputs, Isolator, Joint,
-    JointMotion, PointAxis, SignalInfo, StateKind, StateLayout,
+    JointMotion, PointAxis, SignalInfo, StateKind, StateLayout, Visual,
 };
 pub use equilibrium::{EquilibriumError, EquilibriumKind};
 pub use error::LoadError;
@@ -98,7 +98,7 @@ pub use lugre::{InvalidLugreParameter, LugreKey, LugreOf, LugreParams};
 pub use model::Model;
 pub use parameter::Parameter;
 pub use reference::{Reference, ReferenceSample};
-pub use robot::{FISTAGE_NS, IsolatorKey, RobotSpec};
+pub use robot::{FISTAGE_NS, IsolatorKey, RobotSpec, VisualShape, VisualSpec};
 pub use rule::{Rule, RuleViolation};
 pub use scalar::{Dual64, DualSVec64, Scalar};
 pub use scenario::{

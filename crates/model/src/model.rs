@@ -40,12 +40,20 @@ pub struct Model {
     /// parameter table reads the compensator's and observer's values here).
     pub(crate) compensation: Vec<crate::compensation::CompensationSettings>,
     pub(crate) observer: Option<crate::compensation::ObserverSettings>,
+    /// The robot file's visual solids, placed on their bodies.
+    pub(crate) visuals: Vec<crate::elements::Visual>,
 }
 
 impl Model {
     /// Robot name.
     pub fn name(&self) -> &str {
         &self.name
+    }
+
+    /// The robot file's `<visual>` boxes, cylinders and spheres, each on the
+    /// body its link merged into (or the world), for drawing.
+    pub fn visuals(&self) -> &[crate::elements::Visual] {
+        &self.visuals
     }
 
     /// What a reader should know about this legal but odd study, one

@@ -1,6 +1,8 @@
 //! The 3D mode view's data: each body's pose at the equilibrium and the
-//! shapes that draw it (its inertia-equivalent box, coloured as a bearing
-//! where it carries a friction contact), the rails under the contacts, the
+//! shapes that draw it (the robot file's `<visual>` boxes, cylinders and
+//! spheres, or where it has none its inertia-equivalent box; coloured as a
+//! bearing where it carries a friction contact), the solids welded to the
+//! world, the rails under the contacts, the
 //! isolators' attach points, and, per mode, each body's rigid motion per unit
 //! of the mode shape.
 //!
@@ -10,7 +12,7 @@
 //! poses are differenced, so any joint tree moves as the model moves it.
 
 use fistage_analysis::{ModalAnalysis, Mode, Participation};
-use fistage_model::{Frame, Model};
+use fistage_model::{Frame, Model, VisualShape};
 use nalgebra::{Matrix3, Rotation3, SymmetricEigen, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -32,6 +34,8 @@ pub struct Scene {
     pub centre: [f64; 3],
     /// The moving bodies.
     pub bodies: Vec<SceneBody>,
+    /// The robot file's solids on links welded to the world, world frame.
+    pub ground: Vec<Shape>,
     /// The rails (counter-surfaces of the friction contacts).
     pub rails: Vec<Rail>,
     /// The isolators, drawn as lines between their attach points.
@@ -141,16 +145,19 @@ impl Scene {
             .bodies()
             .iter()
             .enumerate()
-            .map(|(b, body)| SceneBody {
-                name: body.name.clone(),
-                position: poses[b].1.into(),
-                quaternion: quaternion_of(&poses[b].0),
-                shapes: vec![inertia_box(
-                    body.mass,
-                    &body.com,
-                    &body.inertia,
-                    model.frictions().iter().any(|f| f.body == b),
-                )],
+            .map(|(b, body)| {
+                let bearing = model.frictions().iter().any(|f| f.body == b);
+                let drawn = visual_shapes(model, Frame::Body(b), bearing);
+                SceneBody {
+                    name: body.name.clone(),
+                    position: poses[b].1.into(),
+                    quaternion: quaternion_of(&poses[b].0),
+                    shapes: if drawn.is_empty() {
+                        vec![inertia_box(body.mass, &body.com, &body.inertia, bearing)]
+                    } else {
+                        drawn
+                    },
+                }
             })
             .collect();
         let (centre, span) = extent(&bodies);
@@ -161,6 +168,7 @@ impl Scene {
             ),
             span,
             centre: centre.into(),
+            ground: visual_shapes(model, Frame::World, false),
             rails: rails(model, &poses, span),
             isolators: isolators(model),
             modes: Vec::new(),
@@ -257,6 +265,30 @@ fn body_motions(model: &Model, analysis: &ModalAnalysis, mode: &Mode) -> Vec<Bod
                 rotation_im,
             },
         )
+        .collect()
+}
+
+/// The robot file's visual solids on `frame`, as shapes in its frame.
+fn visual_shapes(model: &Model, frame: Frame, bearing: bool) -> Vec<Shape> {
+    model
+        .visuals()
+        .iter()
+        .filter(|v| v.frame == frame)
+        .map(|v| {
+            let (kind, size) = match v.shape {
+                VisualShape::Box(size) => ("box", size.to_vec()),
+                VisualShape::Cylinder { radius, length } => ("cylinder", vec![radius, length]),
+                VisualShape::Sphere(radius) => ("sphere", vec![radius]),
+            };
+            let q = v.origin.rotation;
+            Shape {
+                kind: kind.into(),
+                size,
+                position: v.origin.translation.vector.into(),
+                quaternion: [q.i, q.j, q.k, q.w],
+                role: if bearing { "bearing" } else { "visual" }.into(),
+            }
+        })
         .collect()
 }
 
@@ -378,6 +410,49 @@ mod tests {
         }
         assert_eq!(shape.position, [0.0, 0.0, 0.01]);
         assert_eq!(shape.role, "inertia");
+    }
+
+    /// The four-bearing stage is drawn from its robot file's boxes, with a
+    /// rail under each bearing and a strut per isolator; the table's modes
+    /// move it rigidly (no body moves where the shape has no entry).
+    #[test]
+    fn the_four_bearing_stage_is_drawn_from_its_visuals() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let loaded =
+            fistage_model::load(&root.join("scenarios/coupling/symmetric_fig05b.toml")).unwrap();
+        let inputs = fistage_analysis::modes::equilibrium_inputs(&loaded.scenario);
+        let start = fistage_model::initial_state(&loaded.model, &loaded.scenario).unwrap();
+        let analysis = fistage_analysis::modal_analysis(
+            &loaded.model,
+            &inputs,
+            fistage_model::EquilibriumKind::Sticking,
+            &start,
+        )
+        .unwrap();
+        let shown = analysis.mechanical_modes();
+        let scene = Scene::new(&loaded.model, &analysis, &shown);
+        let table = scene.bodies.iter().find(|b| b.name == "table").unwrap();
+        assert_eq!(table.shapes.len(), 1);
+        assert_eq!(table.shapes[0].size, vec![0.15, 0.15, 0.0165]);
+        assert_eq!(table.shapes[0].role, "visual");
+        let bearings = scene
+            .bodies
+            .iter()
+            .filter(|b| b.shapes[0].role == "bearing");
+        assert_eq!(bearings.count(), 4);
+        assert_eq!((scene.rails.len(), scene.isolators.len()), (4, 4));
+        assert!(scene.ground.is_empty());
+        // The sticking stage's first shown mode is the table on its isolators
+        // along x: the stuck bearings move on their bristles only, under 5% of it.
+        let mode = &scene.modes[0];
+        let moved = |name: &str| {
+            let b = scene.bodies.iter().position(|b| b.name == name).unwrap();
+            Vector3::from(mode.bodies[b].translation_re).norm()
+        };
+        for bearing in ["bearing_fl", "bearing_fr", "bearing_rl", "bearing_rr"] {
+            assert!(moved(bearing) < 0.05 * moved("table"), "{bearing}");
+        }
+        assert!(mode.scale > 0.0);
     }
 
     /// A point mass has no box of its moments: a cube of its mass.

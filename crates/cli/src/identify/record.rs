@@ -355,6 +355,11 @@ fn run_stage(args: &RecordArgs, stage: &Path) -> Result<()> {
             std::fs::write(&path, text)
                 .with_context(|| format!("{}: cannot write", path.display()))?;
         }
+        if !args.output.no_report {
+            crate::report::write(dir, || {
+                fistage_report::sections::identify::stage_section(&records, &fit, &report)
+            })?;
+        }
         folder.commit()?;
     }
     print_report(args.output.json, &json, &report.table());
@@ -389,6 +394,11 @@ fn write_record_outputs(
         std::fs::write(&path, text).with_context(|| format!("{}: cannot write", path.display()))?;
     }
     fistage_plot::figures::record::write(record, fit, dir)?;
+    if !output.no_report {
+        crate::report::write(dir, || {
+            fistage_report::sections::identify::record_section(record, fit, report)
+        })?;
+    }
     Ok(())
 }
 

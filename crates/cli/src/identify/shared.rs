@@ -47,6 +47,9 @@ pub(super) struct OutputArgs {
     /// still named, and still left out of override.toml).
     #[arg(long)]
     pub(crate) allow_undetermined: bool,
+    /// Skip the HTML page (report.html) in the --out folder.
+    #[arg(long)]
+    pub(crate) no_report: bool,
 }
 
 /// The refusal of an undetermined fit, saying that `--out` was left as it was.

@@ -57,6 +57,35 @@ pub struct LinkSpec {
     pub inertial_origin: Isometry3<f64>,
     /// Inertia tensor about the centre of mass in `inertial_origin` axes, kg m^2.
     pub inertia: Matrix3<f64>,
+    /// The link's `<visual>` solids (boxes, cylinders, spheres), for drawing.
+    pub visuals: Vec<VisualSpec>,
+}
+
+/// A `<visual>` solid of a link: what the 3D view draws.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VisualSpec {
+    /// The solid's frame in the link frame.
+    pub origin: Isometry3<f64>,
+    /// The solid.
+    pub shape: VisualShape,
+}
+
+/// The solids URDF describes by their dimensions (meshes and capsules are
+/// not drawn: a body without a drawable visual is drawn as its
+/// inertia-equivalent box).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum VisualShape {
+    /// Edge lengths along the frame's x, y, z, m.
+    Box([f64; 3]),
+    /// Radius and length along the frame's z, m.
+    Cylinder {
+        /// Radius, m.
+        radius: f64,
+        /// Length, m.
+        length: f64,
+    },
+    /// Radius, m.
+    Sphere(f64),
 }
 
 /// A joint as written in the file.
@@ -442,7 +471,43 @@ fn link_spec(link: &urdf_rs::Link, file: &Path) -> Result<LinkSpec, LoadError> {
         mass,
         inertial_origin,
         inertia,
+        visuals: visuals(link, file)?,
     })
+}
+
+/// The drawable `<visual>` solids of `link`, with positive, finite sizes.
+fn visuals(link: &urdf_rs::Link, file: &Path) -> Result<Vec<VisualSpec>, LoadError> {
+    let mut solids = Vec::new();
+    for (k, visual) in link.visual.iter().enumerate() {
+        let element = format!("link \"{}\" visual {}", link.name, k + 1);
+        let shape = match &visual.geometry {
+            urdf_rs::Geometry::Box { size } => VisualShape::Box([size[0], size[1], size[2]]),
+            urdf_rs::Geometry::Cylinder { radius, length } => VisualShape::Cylinder {
+                radius: *radius,
+                length: *length,
+            },
+            urdf_rs::Geometry::Sphere { radius } => VisualShape::Sphere(*radius),
+            urdf_rs::Geometry::Capsule { .. } | urdf_rs::Geometry::Mesh { .. } => continue,
+        };
+        let sizes: Vec<f64> = match shape {
+            VisualShape::Box(size) => size.to_vec(),
+            VisualShape::Cylinder { radius, length } => vec![radius, length],
+            VisualShape::Sphere(radius) => vec![radius],
+        };
+        if sizes.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+            return Err(LoadError::robot(
+                file,
+                element,
+                format!("geometry sizes must be positive and finite, got {sizes:?}"),
+            ));
+        }
+        let origin = pose_to_isometry(&visual.origin);
+        if origin.translation.vector.iter().any(|v| !v.is_finite()) {
+            return Err(LoadError::robot(file, element, "origin must be finite"));
+        }
+        solids.push(VisualSpec { origin, shape });
+    }
+    Ok(solids)
 }
 
 /// A physical inertia tensor has non-negative principal moments that satisfy the

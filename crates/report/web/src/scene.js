@@ -1,5 +1,6 @@
 // The 3D mode view: the stage's bodies drawn from the shapes fistage wrote
-// (URDF visuals, or each body's inertia-equivalent box), the rails, and the
+// (URDF visuals, or each body's inertia-equivalent box), the solids welded to
+// the world, the rails, and the
 // isolators as lines between their attach points; the chosen mode animated
 // on it. A body moves rigidly: at phase p its origin is displaced by
 // s (t_re cos p - t_im sin p) and it turns by s (r_re cos p - r_im sin p)
@@ -39,8 +40,9 @@ function geometryOf(shape) {
 function meshOf(shape) {
   const material = new MeshStandardMaterial({
     color: COLOURS[shape.role] ?? COLOURS.visual,
-    transparent: shape.role === 'inertia',
-    opacity: shape.role === 'inertia' ? 0.8 : 1.0,
+    // The table sees through, so the bearings under it stay in view.
+    transparent: shape.role !== 'bearing',
+    opacity: shape.role === 'bearing' ? 1.0 : 0.75,
     metalness: 0.1,
     roughness: 0.7,
   });
@@ -59,6 +61,10 @@ function bodyGroups(block, scene) {
     scene.add(group);
     return group;
   });
+}
+
+function addGround(block, scene) {
+  for (const shape of block.ground) scene.add(meshOf(shape));
 }
 
 function addRails(block, scene) {
@@ -210,6 +216,7 @@ export function renderScene(block, box, renderPlot) {
 
   const groups = bodyGroups(block, scene);
   addRails(block, scene);
+  addGround(block, scene);
   const lines = isolatorStruts(block, scene);
   const state = { mode: 0, started: performance.now() };
   const explain = () => {
@@ -233,7 +240,9 @@ export function renderScene(block, box, renderPlot) {
     pose(block, groups, mode, phase, Number(slider.value) * mode.scale);
     updateIsolators(groups, lines);
     renderer.render(scene, camera);
+    view.frames += 1;
   };
+  const view = { renderer, draw, frames: 0 };
+  scenes.push(view);
   renderer.setAnimationLoop(draw);
-  scenes.push({ renderer, draw });
 }
