@@ -318,8 +318,24 @@ fn study_and_fit_pages_render_and_carry_the_numbers_of_their_json() {
         "--out".as_ref(),
         fit.as_os_str(),
     ]);
+    let curve = dir.join("stribeck.csv");
+    succeeds(&[
+        "identify".as_ref(),
+        "simulate-stribeck".as_ref(),
+        repo.join("robots/stage_1dof_rigid.urdf").as_os_str(),
+        "--out".as_ref(),
+        curve.as_os_str(),
+    ]);
+    let stribeck = dir.join("stribeck");
+    succeeds(&[
+        "identify".as_ref(),
+        "stribeck".as_ref(),
+        curve.as_os_str(),
+        "--out".as_ref(),
+        stribeck.as_os_str(),
+    ]);
     let profile = dir.join("profile");
-    for folder in [&robust, &tune, &fit] {
+    for folder in [&robust, &tune, &fit, &stribeck] {
         let page = folder.join("report.html");
         let (verdict, log) = open(&browser, &page, &profile);
         assert_rendered(&page, &verdict, &log, 0);

@@ -290,6 +290,18 @@ pub(super) fn run_stribeck(args: &StribeckArgs) -> Result<()> {
             &stribeck_curve_csv(&data, &fit, 400),
         )?;
         fistage_plot::figures::curve::write_stribeck(&data, &fit, asymmetric.as_ref(), dir)?;
+        if !args.output.no_report {
+            crate::report::write(dir, || {
+                let plot =
+                    fistage_plot::figures::curve::stribeck_plot(&data, &fit, asymmetric.as_ref());
+                let plots = vec![fistage_report::plot::from_xy(&plot)];
+                fistage_report::sections::identify::curve_section(
+                    "identify stribeck",
+                    &report,
+                    plots,
+                )
+            })?;
+        }
         folder.commit()?;
     }
     print_report(args.output.json, &json, &report.table());
@@ -334,6 +346,13 @@ pub(super) fn run_frf(args: &FrfArgs) -> Result<()> {
             &frf_curve_csv(&data, &fit, 400),
         )?;
         fistage_plot::figures::curve::write_frf(&data, &fit, dir)?;
+        if !args.output.no_report {
+            crate::report::write(dir, || {
+                let (title, freq_hz, series) = fistage_plot::figures::curve::frf_bode(&data, &fit);
+                let plots = fistage_report::plot::from_bode(&title, &freq_hz, &series);
+                fistage_report::sections::identify::curve_section("identify frf", &report, plots)
+            })?;
+        }
         folder.commit()?;
     }
     print_report(args.output.json, &json, &report.table());

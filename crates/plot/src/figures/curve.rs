@@ -121,7 +121,7 @@ fn stribeck_curve(
 /// The Bode plot of an FRF fit: title, frequencies (the data's and a dense
 /// logarithmic grid, merged) and the two responses, each NaN where it has no
 /// value. Measured phases are moved by whole turns next to the model's.
-fn frf_bode(data: &FrfData, fit: &FrfFit) -> (String, Vec<f64>, Vec<BodeSeries>) {
+pub fn frf_bode(data: &FrfData, fit: &FrfFit) -> (String, Vec<f64>, Vec<BodeSeries>) {
     let to_hz = |w: f64| w / (2.0 * std::f64::consts::PI);
     let lo = data.omega.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = data.omega.iter().copied().fold(0.0, f64::max);

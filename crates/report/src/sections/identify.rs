@@ -59,24 +59,13 @@ pub fn record_section(record: &Record, fit: &RecordFit, report: &RecordReport) -
         ("sigma2", &report.sigma2),
         ("mass", &report.mass),
     ];
-    blocks.push(Block::Table {
-        title: "parameters".into(),
-        columns: [
-            "parameter",
-            "unit",
-            "value",
-            "std error",
-            "95% low",
-            "95% high",
-        ]
-        .map(String::from)
-        .to_vec(),
-        rows: params
+    blocks.push(parameter_table(
+        params
             .iter()
             .filter(|(name, _)| report.mass_fitted || *name != "mass")
             .map(|(name, p)| param_row(name, p))
             .collect(),
-    });
+    ));
     blocks.extend(data_against_fit(
         &report.source,
         &record.time,
@@ -91,6 +80,24 @@ pub fn record_section(record: &Record, fit: &RecordFit, report: &RecordReport) -
         heading: format!("identify record: {}", report.source),
         source: report.source.clone(),
         blocks,
+    }
+}
+
+/// The table of a curve or one-mass fit's parameters, one row each.
+fn parameter_table(rows: Vec<Vec<String>>) -> Block {
+    Block::Table {
+        title: "parameters".into(),
+        columns: [
+            "parameter",
+            "unit",
+            "value",
+            "std error",
+            "95% low",
+            "95% high",
+        ]
+        .map(String::from)
+        .to_vec(),
+        rows,
     }
 }
 
@@ -354,4 +361,55 @@ fn data_against_fit(
         ),
         second,
     ]
+}
+
+/// The section of a curve fit (`identify stribeck` or `identify frf`): its
+/// report's parameters with intervals, what the data could not determine,
+/// and `plots` (the data against the fit).
+pub fn curve_section(heading: &str, report: &impl serde::Serialize, plots: Vec<Block>) -> Section {
+    let json = serde_json::to_value(report).unwrap_or(Value::Null);
+    let source = json["source"].as_str().unwrap_or_default().to_string();
+    let mut blocks = vec![Block::facts(
+        "fit",
+        vec![
+            ["program".into(), crate::page::generator()],
+            ["data".into(), source.clone()],
+        ],
+    )];
+    for missing in json["not_identifiable"].as_array().into_iter().flatten() {
+        blocks.push(Block::warning(format!(
+            "not determined by these data: {}: {}",
+            missing["parameter"].as_str().unwrap_or_default(),
+            missing["reason"].as_str().unwrap_or_default()
+        )));
+    }
+    for warning in json["warnings"].as_array().into_iter().flatten() {
+        blocks.push(Block::warning(
+            warning.as_str().unwrap_or_default().to_string(),
+        ));
+    }
+    let show = |v: &Value| v.as_f64().map_or_else(|| "-".into(), number);
+    let rows = json
+        .as_object()
+        .into_iter()
+        .flatten()
+        .filter(|(_, v)| v.get("value").is_some() && v.get("unit").is_some())
+        .map(|(name, p)| {
+            vec![
+                name.clone(),
+                p["unit"].as_str().unwrap_or_default().to_string(),
+                show(&p["value"]),
+                show(&p["std_error"]),
+                show(&p["ci95"][0]),
+                show(&p["ci95"][1]),
+            ]
+        })
+        .collect();
+    blocks.push(parameter_table(rows));
+    blocks.extend(plots);
+    Section {
+        heading: format!("{heading}: {source}"),
+        source,
+        blocks,
+    }
 }
