@@ -1,6 +1,7 @@
-//! Robot files: URDF read with `urdf-rs` for links and joints, plus the fistage
-//! extension elements (read with `roxmltree` from the same file, since `urdf-rs`
-//! drops elements it does not know).
+//! Robot files: the standard URDF elements fistage uses (the robot's name, its
+//! links with their inertial data and visual solids, its joints) and the
+//! fistage extension elements, all read with `roxmltree` from one parse, after
+//! [`crate::urdf_check`] has checked every number they hold.
 //!
 //! Extension elements live in the namespace [`FISTAGE_NS`]:
 //!
@@ -26,6 +27,7 @@
 use crate::error::LoadError;
 use crate::lugre::LugreParams;
 use crate::rule::{Rule, check_name};
+use crate::urdf_check::children;
 use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
@@ -269,22 +271,15 @@ impl RobotSpec {
             message: format!("malformed XML: {e}"),
         })?;
         crate::urdf_check::check_urdf(&document, file)?;
-        let urdf = urdf_rs::read_from_string(text).map_err(|e| LoadError::Syntax {
-            file: file.to_path_buf(),
-            message: format!("not a valid URDF robot: {e}"),
-        })?;
+        let root = document.root_element();
         let reader = ExtensionReader { file };
         let mut spec = RobotSpec {
             file: file.to_path_buf(),
-            name: urdf.name.clone(),
-            links: urdf
-                .links
-                .iter()
+            name: root.attribute("name").unwrap_or_default().to_string(),
+            links: children(root, "link")
                 .map(|l| link_spec(l, file))
                 .collect::<Result<_, _>>()?,
-            joints: urdf
-                .joints
-                .iter()
+            joints: children(root, "joint")
                 .map(|j| joint_spec(j, file))
                 .collect::<Result<_, _>>()?,
             isolators: Vec::new(),
@@ -410,8 +405,38 @@ fn check_nesting(text: &str) -> Result<(), String> {
     Ok(())
 }
 
-fn pose_to_isometry(pose: &urdf_rs::Pose) -> Isometry3<f64> {
-    isometry_from_xyz_rpy(pose.xyz.0, pose.rpy.0)
+/// The first standard child element of `node` named `tag`.
+fn first<'n, 'i>(
+    node: roxmltree::Node<'n, 'i>,
+    tag: &'static str,
+) -> Option<roxmltree::Node<'n, 'i>> {
+    children(node, tag).next()
+}
+
+/// The numbers of `attribute` (checked by [`crate::urdf_check`]: finite, and
+/// as many as it holds), or `default` where the element or attribute is absent.
+fn numbers<const N: usize>(
+    node: Option<roxmltree::Node>,
+    attribute: &str,
+    default: [f64; N],
+) -> [f64; N] {
+    let Some(text) = node.and_then(|n| n.attribute(attribute)) else {
+        return default;
+    };
+    let mut values = default;
+    for (value, word) in values.iter_mut().zip(text.split_whitespace()) {
+        *value = word.parse().unwrap_or(*value);
+    }
+    values
+}
+
+/// The pose of the `<origin>` child of `node` (identity where absent).
+fn origin_of(node: roxmltree::Node) -> Isometry3<f64> {
+    let origin = first(node, "origin");
+    isometry_from_xyz_rpy(
+        numbers(origin, "xyz", [0.0; 3]),
+        numbers(origin, "rpy", [0.0; 3]),
+    )
 }
 
 /// URDF pose convention: translate by xyz, rotate by fixed-axis roll, pitch, yaw.
@@ -422,9 +447,11 @@ pub fn isometry_from_xyz_rpy(xyz: [f64; 3], rpy: [f64; 3]) -> Isometry3<f64> {
     )
 }
 
-fn link_spec(link: &urdf_rs::Link, file: &Path) -> Result<LinkSpec, LoadError> {
-    let element = format!("link \"{}\"", link.name);
-    let mass = link.inertial.mass.value;
+fn link_spec(link: roxmltree::Node, file: &Path) -> Result<LinkSpec, LoadError> {
+    let name = link.attribute("name").unwrap_or_default();
+    let element = format!("link \"{name}\"");
+    let inertial = first(link, "inertial");
+    let [mass] = numbers(inertial.and_then(|i| first(i, "mass")), "value", [0.0]);
     if !mass.is_finite() || mass < 0.0 {
         return Err(LoadError::robot(
             file,
@@ -443,17 +470,19 @@ fn link_spec(link: &urdf_rs::Link, file: &Path) -> Result<LinkSpec, LoadError> {
             ),
         ));
     }
-    let i = &link.inertial.inertia;
+    let moments = inertial.and_then(|i| first(i, "inertia"));
+    let [ixx, ixy, ixz, iyy, iyz, izz] =
+        ["ixx", "ixy", "ixz", "iyy", "iyz", "izz"].map(|key| numbers(moments, key, [0.0])[0]);
     let inertia = Matrix3::new(
-        i.ixx, i.ixy, i.ixz, //
-        i.ixy, i.iyy, i.iyz, //
-        i.ixz, i.iyz, i.izz,
+        ixx, ixy, ixz, //
+        ixy, iyy, iyz, //
+        ixz, iyz, izz,
     );
     if inertia.iter().any(|v| !v.is_finite()) {
         return Err(LoadError::robot(file, element, "inertia must be finite"));
     }
     check_inertia(&inertia).map_err(|m| LoadError::robot(file, &element, m))?;
-    let inertial_origin = pose_to_isometry(&link.inertial.origin);
+    let inertial_origin = inertial.map_or_else(Isometry3::identity, origin_of);
     if inertial_origin
         .translation
         .vector
@@ -467,7 +496,7 @@ fn link_spec(link: &urdf_rs::Link, file: &Path) -> Result<LinkSpec, LoadError> {
         ));
     }
     Ok(LinkSpec {
-        name: link.name.clone(),
+        name: name.to_string(),
         mass,
         inertial_origin,
         inertia,
@@ -475,19 +504,27 @@ fn link_spec(link: &urdf_rs::Link, file: &Path) -> Result<LinkSpec, LoadError> {
     })
 }
 
-/// The drawable `<visual>` solids of `link`, with positive, finite sizes.
-fn visuals(link: &urdf_rs::Link, file: &Path) -> Result<Vec<VisualSpec>, LoadError> {
+/// The drawable `<visual>` solids of `link` (boxes, cylinders, spheres), with
+/// positive sizes; meshes and capsules are left out.
+fn visuals(link: roxmltree::Node, file: &Path) -> Result<Vec<VisualSpec>, LoadError> {
+    let name = link.attribute("name").unwrap_or_default();
     let mut solids = Vec::new();
-    for (k, visual) in link.visual.iter().enumerate() {
-        let element = format!("link \"{}\" visual {}", link.name, k + 1);
-        let shape = match &visual.geometry {
-            urdf_rs::Geometry::Box { size } => VisualShape::Box([size[0], size[1], size[2]]),
-            urdf_rs::Geometry::Cylinder { radius, length } => VisualShape::Cylinder {
-                radius: *radius,
-                length: *length,
-            },
-            urdf_rs::Geometry::Sphere { radius } => VisualShape::Sphere(*radius),
-            urdf_rs::Geometry::Capsule { .. } | urdf_rs::Geometry::Mesh { .. } => continue,
+    for (k, visual) in children(link, "visual").enumerate() {
+        let element = format!("link \"{name}\" visual {}", k + 1);
+        let Some(geometry) = first(visual, "geometry") else {
+            return Err(LoadError::robot(file, element, "missing <geometry>"));
+        };
+        let shape = if let Some(solid) = first(geometry, "box") {
+            VisualShape::Box(numbers(Some(solid), "size", [0.0; 3]))
+        } else if let Some(solid) = first(geometry, "cylinder") {
+            VisualShape::Cylinder {
+                radius: numbers(Some(solid), "radius", [0.0])[0],
+                length: numbers(Some(solid), "length", [0.0])[0],
+            }
+        } else if let Some(solid) = first(geometry, "sphere") {
+            VisualShape::Sphere(numbers(Some(solid), "radius", [0.0])[0])
+        } else {
+            continue;
         };
         let sizes: Vec<f64> = match shape {
             VisualShape::Box(size) => size.to_vec(),
@@ -501,11 +538,10 @@ fn visuals(link: &urdf_rs::Link, file: &Path) -> Result<Vec<VisualSpec>, LoadErr
                 format!("geometry sizes must be positive and finite, got {sizes:?}"),
             ));
         }
-        let origin = pose_to_isometry(&visual.origin);
-        if origin.translation.vector.iter().any(|v| !v.is_finite()) {
-            return Err(LoadError::robot(file, element, "origin must be finite"));
-        }
-        solids.push(VisualSpec { origin, shape });
+        solids.push(VisualSpec {
+            origin: origin_of(visual),
+            shape,
+        });
     }
     Ok(solids)
 }
@@ -530,24 +566,35 @@ fn check_inertia(inertia: &Matrix3<f64>) -> Result<(), String> {
     Ok(())
 }
 
-fn joint_spec(joint: &urdf_rs::Joint, file: &Path) -> Result<JointSpec, LoadError> {
-    let element = format!("joint \"{}\"", joint.name);
-    let kind = match joint.joint_type {
-        urdf_rs::JointType::Fixed => JointKind::Fixed,
-        urdf_rs::JointType::Prismatic => JointKind::Prismatic,
-        urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => JointKind::Revolute,
-        urdf_rs::JointType::Floating => JointKind::Floating,
-        ref other => {
+fn joint_spec(joint: roxmltree::Node, file: &Path) -> Result<JointSpec, LoadError> {
+    let name = joint.attribute("name").unwrap_or_default();
+    let element = format!("joint \"{name}\"");
+    let kind = match joint.attribute("type").unwrap_or_default() {
+        "fixed" => JointKind::Fixed,
+        "prismatic" => JointKind::Prismatic,
+        "revolute" | "continuous" => JointKind::Revolute,
+        "floating" => JointKind::Floating,
+        other => {
             return Err(LoadError::robot(
                 file,
                 element,
                 format!(
-                    "joint type {other:?} is not supported (use fixed, prismatic, revolute, continuous or floating)"
+                    "joint type \"{other}\" is not supported (use fixed, prismatic, revolute, continuous or floating)"
                 ),
             ));
         }
     };
-    let axis = Vector3::from(joint.axis.xyz.0);
+    let link_of = |tag: &'static str| {
+        first(joint, tag)
+            .and_then(|n| n.attribute("link"))
+            .map(str::to_string)
+            .ok_or_else(|| {
+                LoadError::robot(file, &element, format!("missing <{tag} link=\"...\"/>"))
+            })
+    };
+    let (parent, child) = (link_of("parent")?, link_of("child")?);
+    // URDF's default axis is x.
+    let axis = Vector3::from(numbers(first(joint, "axis"), "xyz", [1.0, 0.0, 0.0]));
     let needs_axis = matches!(kind, JointKind::Prismatic | JointKind::Revolute);
     let axis = if needs_axis {
         unit_axis(axis).map_err(|m| LoadError::robot(file, &element, m))?
@@ -555,11 +602,11 @@ fn joint_spec(joint: &urdf_rs::Joint, file: &Path) -> Result<JointSpec, LoadErro
         Vector3::x()
     };
     Ok(JointSpec {
-        name: joint.name.clone(),
+        name: name.to_string(),
         kind,
-        parent: joint.parent.link.clone(),
-        child: joint.child.link.clone(),
-        origin: pose_to_isometry(&joint.origin),
+        parent,
+        child,
+        origin: origin_of(joint),
         axis,
     })
 }

@@ -1,8 +1,7 @@
-//! The standard URDF elements checked before `urdf-rs` reads them, so that a
-//! bad value is reported with its element, attribute and line (the URDF
-//! reader only says "invalid float literal"), and so that values it takes
-//! silently (a NaN joint limit, an empty robot name, a misspelt root
-//! element) are refused: the root element is `<robot>` with a usable name,
+//! The standard URDF elements checked before [`crate::robot`] reads them, so
+//! that a bad value is reported with its element, attribute and line, and so
+//! that values a reader would take silently (a NaN joint limit, an empty
+//! robot name, a misspelt root element) are refused: the root element is `<robot>` with a usable name,
 //! every link and joint has a name, a joint's type is one URDF defines, and
 //! every numeric attribute of the elements fistage reads (origins, inertia,
 //! axes, limits, dynamics, geometry) holds the right count of finite numbers.
@@ -76,7 +75,7 @@ fn line(node: roxmltree::Node) -> u32 {
 }
 
 /// A standard (un-namespaced) child element of `node` by tag.
-fn children<'n, 'i>(
+pub(crate) fn children<'n, 'i>(
     node: roxmltree::Node<'n, 'i>,
     tag: &'static str,
 ) -> impl Iterator<Item = roxmltree::Node<'n, 'i>> {
