@@ -27,12 +27,15 @@ from ._fistage import (
     Result,
     Scenario,
     SimulationError,
+    _page_frame,
+    _page_write,
     load,
 )
 from . import identify
 
 __all__ = [
     "Error",
+    "Modes",
     "Study",
     "IdentificationError",
     "LoadError",
@@ -68,9 +71,10 @@ class Study:
     them), ``summary`` (summary.json of a tolerance analysis, else None).
     ``study["stable_linear"]`` is a column; ``to_pandas()`` a DataFrame."""
 
-    def __init__(self, table, summary=None):
+    def __init__(self, table, summary=None, page=None):
         import numpy
 
+        self._page = page
         lines = [line for line in table.splitlines() if line]
         names = lines[0].split(",")
         rows = [line.split(",") for line in lines[1:]]
@@ -99,6 +103,14 @@ class Study:
 
     def __len__(self):
         return len(self.points)
+
+    def _repr_html_(self):
+        """The study's page in Jupyter (as report.html of the program's folder)."""
+        return None if self._page is None else _page_frame(self._page)
+
+    def report(self, path):
+        """Writes the study's HTML page (as the program's report.html)."""
+        _page_write(self._page, os.fspath(path))
 
     def __repr__(self):
         return "Study(%d rows, columns %s)" % (len(self.points), ", ".join(self.columns))
@@ -148,7 +160,8 @@ def _sweep(self, threads=None, progress=None, out=None, shard=None, merge=None, 
     resumes (``resume=False`` recomputes); ``merge`` joins shard folders (the
     program's too) into ``out``; ``force`` replaces other work there."""
     flags = _study_flags(out, shard, merge, force, resume)
-    return Study(self._sweep(threads=threads, progress=progress, **flags))
+    table, page = self._sweep(threads=threads, progress=progress, **flags)
+    return Study(table, page=page)
 
 
 def _robust(self, samples=None, seed=None, threads=None, progress=None, out=None, shard=None, merge=None,
@@ -172,9 +185,37 @@ def _robust(self, samples=None, seed=None, threads=None, progress=None, out=None
         flags["from_fit"] = str(from_fit)
     if from_fit_draw is not None:
         flags["from_fit_draw"] = from_fit_draw
-    table, summary = self._robust(samples=samples, seed=seed, threads=threads, progress=progress, **flags)
-    return Study(table, json.loads(summary))
+    table, summary, page = self._robust(samples=samples, seed=seed, threads=threads, progress=progress,
+                                        **flags)
+    return Study(table, json.loads(summary), page=page)
+
+
+class Modes(dict):
+    """The result of :meth:`Scenario.modes`: the dict modes.json holds (with
+    numpy arrays ``eigenvalues``, ``frequency_hz``, ``damping_ratio``), whose
+    page (the stage in 3D with every mode animated) Jupyter shows."""
+
+    def _repr_html_(self):
+        return _page_frame(self._page)
+
+    def report(self, path):
+        """Writes the page (as report.html of ``fistage modes``)."""
+        _page_write(self._page, os.fspath(path))
+
+
+def _modes(self, equilibrium="slipping"):
+    """modes(equilibrium="slipping") -> Modes: the linearisation at the
+    sticking or slipping equilibrium, as modes.json holds it (verdict,
+    max_real_part, state, coordinates, modes with frequency, damping ratio and
+    energy shares), plus numpy arrays ``eigenvalues`` (complex),
+    ``frequency_hz`` and ``damping_ratio``. A verdict the numerics cannot back
+    is "undetermined". In Jupyter it shows its page."""
+    data, page = self._modes(equilibrium)
+    result = Modes(data)
+    result._page = page
+    return result
 
 
 Scenario.sweep = _sweep
 Scenario.robust = _robust
+Scenario.modes = _modes

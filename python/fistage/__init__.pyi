@@ -76,7 +76,7 @@ class Scenario:
         now and then; Ctrl-C or an exception in the callback stops the run."""
     def plant(self) -> Plant:
         """The stage as an ODE for Python's own integrators."""
-    def modes(self, equilibrium: str = "slipping") -> Dict[str, Any]:
+    def modes(self, equilibrium: str = "slipping") -> Modes:
         """The linearisation at an equilibrium, as modes.json, with numpy eigenvalues."""
     def sweep(self, threads: Optional[int] = None,
               progress: Optional[Callable[[int, int], None]] = None,
@@ -102,6 +102,15 @@ class Study:
     def __getitem__(self, name: str) -> Any: ...
     def __len__(self) -> int: ...
     def to_pandas(self) -> Any: ...
+    def report(self, path: Union[str, PathLike]) -> None:
+        """Writes the study's HTML page (as the program's report.html)."""
+    def _repr_html_(self) -> Optional[str]: ...
+
+class Modes(Dict[str, Any]):
+    """The dict modes.json holds; Jupyter shows its page (the stage in 3D, every mode animated)."""
+    def report(self, path: Union[str, PathLike]) -> None:
+        """Writes the page (as report.html of `fistage modes`)."""
+    def _repr_html_(self) -> str: ...
 
 def load(path: Union[str, PathLike]) -> Scenario:
     """Reads and checks a scenario file and its robot."""

@@ -227,7 +227,11 @@ impl Scenario {
     /// `frequency_hz` and `damping_ratio`. A verdict the numerics cannot
     /// back is "undetermined".
     #[pyo3(signature = (equilibrium = "slipping"))]
-    fn modes<'py>(&self, py: Python<'py>, equilibrium: &str) -> PyResult<Bound<'py, PyAny>> {
+    fn _modes<'py>(
+        &self,
+        py: Python<'py>,
+        equilibrium: &str,
+    ) -> PyResult<(Bound<'py, PyAny>, String)> {
         let kind = match equilibrium {
             "sticking" => fistage_model::EquilibriumKind::Sticking,
             "slipping" => fistage_model::EquilibriumKind::Slipping,
@@ -260,7 +264,8 @@ impl Scenario {
             "damping_ratio",
             column(analysis.modes.iter().map(|m| m.damping_ratio).collect())?,
         )?;
-        Ok(result)
+        let section = fistage_report::sections::modes::section(&loaded, &[analysis], &[]);
+        Ok((result, section_json(&section)?))
     }
 
     /// sweep(threads=None, progress=None, out=None, shard=None, merge=None,
@@ -283,7 +288,7 @@ impl Scenario {
         merge: Option<Vec<PathBuf>>,
         force: bool,
         resume: bool,
-    ) -> PyResult<String> {
+    ) -> PyResult<(String, String)> {
         let loaded = self.loaded().map_err(load_error)?;
         let (_, robot) = self.study().map_err(load_error)?;
         let call = studies::StudyCall::new(threads, progress, (out, shard, merge), force, resume);
@@ -314,7 +319,7 @@ impl Scenario {
         resume: bool,
         from_fit: Option<PathBuf>,
         from_fit_draw: Option<String>,
-    ) -> PyResult<(String, String)> {
+    ) -> PyResult<(String, String, String)> {
         let mut loaded = self.loaded().map_err(load_error)?;
         let (_, robot) = self.study().map_err(load_error)?;
         if from_fit.is_some() || from_fit_draw.is_some() {
@@ -446,12 +451,7 @@ impl RunResult {
 
     /// The page in Jupyter: the same plots, in a frame of the notebook.
     fn _repr_html_(&self) -> PyResult<String> {
-        let html =
-            fistage_report::render(&self.page()).map_err(|e| Error::new_err(e.to_string()))?;
-        Ok(format!(
-            "<iframe srcdoc=\"{}\" style=\"width: 100%; height: 720px; border: none\"></iframe>",
-            html.replace('&', "&amp;").replace('"', "&quot;")
-        ))
+        frame(&self.page())
     }
 }
 
@@ -459,6 +459,40 @@ impl RunResult {
     fn page(&self) -> fistage_report::Page {
         fistage_report::Page::single(self.section.clone())
     }
+}
+
+/// A page in an iframe of its own, as a notebook shows HTML.
+fn frame(page: &fistage_report::Page) -> PyResult<String> {
+    let html = fistage_report::render(page).map_err(|e| Error::new_err(e.to_string()))?;
+    Ok(format!(
+        "<iframe srcdoc=\"{}\" style=\"width: 100%; height: 720px; border: none\"></iframe>",
+        html.replace('&', "&amp;").replace('"', "&quot;")
+    ))
+}
+
+/// A section of a page as the JSON the Python side keeps.
+fn section_json(section: &fistage_report::Section) -> PyResult<String> {
+    serde_json::to_string(section).map_err(|e| Error::new_err(e.to_string()))
+}
+
+/// The page of a section kept as JSON.
+fn page_of(section: &str) -> PyResult<fistage_report::Page> {
+    let section: fistage_report::Section =
+        serde_json::from_str(section).map_err(|e| Error::new_err(e.to_string()))?;
+    Ok(fistage_report::Page::single(section))
+}
+
+/// _page_frame(section) -> the section's page in an iframe (`_repr_html_`
+/// of the Python-side results).
+#[pyfunction]
+fn _page_frame(section: &str) -> PyResult<String> {
+    frame(&page_of(section)?)
+}
+
+/// _page_write(section, path): writes the section's page.
+#[pyfunction]
+fn _page_write(section: &str, path: PathBuf) -> PyResult<()> {
+    fistage_report::write(&page_of(section)?, &path).map_err(|e| Error::new_err(e.to_string()))
 }
 
 /// load(path) -> Scenario: reads and checks a scenario file and its robot.
@@ -497,6 +531,8 @@ fn _fistage(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<plant::Plant>()?;
     m.add_function(wrap_pyfunction!(load, m)?)?;
     m.add_function(wrap_pyfunction!(_restore_scenario, m)?)?;
+    m.add_function(wrap_pyfunction!(_page_frame, m)?)?;
+    m.add_function(wrap_pyfunction!(_page_write, m)?)?;
     m.add("Error", m.py().get_type::<Error>())?;
     m.add("LoadError", m.py().get_type::<LoadError_>())?;
     m.add("SimulationError", m.py().get_type::<SimulationError>())?;

@@ -176,14 +176,14 @@ impl ScenarioInput<'_> {
     }
 }
 
-/// The `[sweep]` grid: `points.csv` as text.
+/// The `[sweep]` grid: `points.csv` as text, and its page's section as JSON.
 pub fn sweep(
     py: Python<'_>,
     loaded: &Loaded,
     robot: &RobotSpec,
     input: &ScenarioInput<'_>,
     call: &StudyCall,
-) -> PyResult<String> {
+) -> PyResult<(String, String)> {
     let spec = SweepSpec::from_scenario(&loaded.scenario)
         .map_err(|e| LoadError_::new_err(e.to_string()))?;
     spec.check_against(&loaded.scenario, robot)
@@ -200,11 +200,12 @@ pub fn sweep(
         |shard| Ok(input.mark(grid.provenance(Some(input.text.as_bytes()), shard)?)),
         |rows, folder| std::fs::write(folder.join("points.json"), grid.points_json(rows)),
     )?;
-    Ok(table_text(&grid, &rows))
+    let section = fistage_report::sections::sweep::section(loaded, &spec, &rows);
+    Ok((table_text(&grid, &rows), crate::section_json(&section)?))
 }
 
-/// The `[robust]` tolerance analysis: `samples.csv` as text and
-/// `summary.json`.
+/// The `[robust]` tolerance analysis: `samples.csv` as text,
+/// `summary.json`, and its page's section as JSON.
 pub fn robust(
     py: Python<'_>,
     loaded: &Loaded,
@@ -212,7 +213,7 @@ pub fn robust(
     input: &ScenarioInput<'_>,
     (samples, seed): (Option<usize>, Option<u64>),
     call: &StudyCall,
-) -> PyResult<(String, String)> {
+) -> PyResult<(String, String, String)> {
     let spec = RobustSpec::from_scenario(&loaded.scenario, robot, samples, seed)
         .map_err(|e| LoadError_::new_err(e.to_string()))?;
     let population = RobustStudy {
@@ -230,7 +231,13 @@ pub fn robust(
         |shard| Ok(input.mark(population.provenance(Some(input.text.as_bytes()), shard)?)),
         |rows, folder| std::fs::write(folder.join("summary.json"), summary_json(rows)),
     )?;
-    Ok((table_text(&population, &rows), summary_json(&rows)))
+    let summary = Summary::of(&spec, &rows);
+    let section = fistage_report::sections::robust::section(loaded, &spec, &rows, &summary);
+    Ok((
+        table_text(&population, &rows),
+        summary_json(&rows),
+        crate::section_json(&section)?,
+    ))
 }
 
 /// Sets the scenario's `[robust] from_fit` and `from_fit_draw` (a table

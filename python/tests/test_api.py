@@ -166,3 +166,20 @@ def test_a_result_shows_its_page_in_jupyter_and_writes_it(root, tmp_path):
     # The page's summary table holds the run's statistics.
     p2p = result.summary["signals"]["encoder.position"]["peak_to_peak"]
     assert f"{p2p:.3e}".replace("e-05", "e-5") in text
+
+
+def test_modes_and_studies_show_their_pages(root, tmp_path):
+    stage = fistage.load(root / "scenarios/coupling/symmetric_fig05b.toml")
+    modes = stage.modes("slipping")
+    # Still the dict it was, now with a page: the 3D view's data and its modes.
+    assert isinstance(modes, dict) and modes["verdict"] == "unstable"
+    html = modes._repr_html_()
+    assert html.startswith("<iframe srcdoc=") and "&quot;type&quot;:&quot;scene&quot;" in html
+    modes.report(tmp_path / "modes.html")
+    assert "fistage-report-data" in (tmp_path / "modes.html").read_text()
+    population = fistage.load(root / "scenarios/robust/four_bearing_population.toml")
+    study = population.robust(samples=16, threads=1)
+    page = study._repr_html_()
+    assert "P(linearly unstable)" in page
+    estimate = study.summary["p_unstable_linear"]["estimate"]
+    assert len(study) == 16 and 0.0 <= estimate <= 1.0

@@ -334,8 +334,26 @@ fn study_and_fit_pages_render_and_carry_the_numbers_of_their_json() {
         "--out".as_ref(),
         stribeck.as_os_str(),
     ]);
+    let sweep = dir.join("sweep");
+    succeeds(&[
+        "sweep".as_ref(),
+        repo.join("scenarios/paper/fig06b_fi_vp20.toml").as_os_str(),
+        "--out".as_ref(),
+        sweep.as_os_str(),
+    ]);
+    let compare = dir.join("compare");
+    let paper = repo.join("scenarios/paper");
+    succeeds(&[
+        "compare".as_ref(),
+        paper.join("fig03a_ff_rigid.toml").as_os_str(),
+        paper.join("fig03a_ff_fi.toml").as_os_str(),
+        "--baseline".as_ref(),
+        paper.join("fig03a_baseline.toml").as_os_str(),
+        "--out".as_ref(),
+        compare.as_os_str(),
+    ]);
     let profile = dir.join("profile");
-    for folder in [&robust, &tune, &fit, &stribeck] {
+    for folder in [&robust, &tune, &fit, &stribeck, &sweep, &compare] {
         let page = folder.join("report.html");
         let (verdict, log) = open(&browser, &page, &profile);
         assert_rendered(&page, &verdict, &log, 0);
