@@ -13,10 +13,23 @@ __all__ = ["Fit", "stribeck", "frf", "record", "read_record", "simulate_record"]
 
 
 class Fit:
-    """A fit report, indexable by parameter name."""
+    """A fit report, indexable by parameter name. A record fit's shows its
+    page in Jupyter (the records against the fit, the parameters with their
+    intervals, the correlation matrix) and writes it with
+    :meth:`write_page`."""
 
-    def __init__(self, report):
+    def __init__(self, report, page=None):
         self.report = report
+        self._page = page
+
+    def _repr_html_(self):
+        return None if self._page is None else _fistage._page_frame(self._page)
+
+    def write_page(self, path):
+        """Writes the fit's HTML page (as report.html of ``fistage identify record``)."""
+        if self._page is None:
+            raise _fistage.Error("this fit has no page (only record fits have one)")
+        _fistage._page_write(self._page, str(path))
 
     def _entries(self):
         listed = self.report.get("parameters")
@@ -129,11 +142,11 @@ def record(t=None, force=None, position=None, mass=None, loss="l2", horizon=0.01
         return _stage(scenario, paths, records, t, force, position, loss, progress, closed_loop)
     if t is None or force is None or position is None:
         raise _fistage.Error("give t, force and position, or a scenario with records")
-    text, simulated = _fistage._record(
+    text, page, simulated = _fistage._record(
         _floats("t", t), _floats("force", force), _floats("position", position),
         mass=mass, loss=loss, horizon=horizon, progress=progress,
         closed_loop=None if closed_loop is None else str(closed_loop))
-    fit = Fit(json.loads(text))
+    fit = Fit(json.loads(text), page)
     fit.simulated = numpy.asarray(simulated, dtype=numpy.float64)
     return fit
 
@@ -153,10 +166,10 @@ def _stage(scenario, paths, records, t, force, position, loss, progress, closed_
         arrays.append((_floats(f"records[{i}].t", entry["t"]),
                        _floats(f"records[{i}].force", entry["force"]),
                        _floats(f"records[{i}].position", entry["position"]), sensors))
-    text, simulated = _fistage._stage(
+    text, page, simulated = _fistage._stage(
         scenario, [str(p) for p in paths], arrays, closed_loop=bool(closed_loop), loss=loss,
         progress=progress)
-    fit = Fit(json.loads(text))
+    fit = Fit(json.loads(text), page)
     fit.simulated = [[numpy.asarray(s, dtype=numpy.float64) for s in per] for per in simulated]
     return fit
 

@@ -1,6 +1,7 @@
 """Type stubs of fistage.identify."""
 
-from typing import Any, Callable, Dict, List, Optional, Tuple
+from os import PathLike
+from typing import Any, Callable, Dict, List, Optional, Tuple, Union
 
 import numpy.typing
 
@@ -14,6 +15,9 @@ class Fit:
     def __getitem__(self, name: str) -> Dict[str, Any]:
         """{"value", "ci95", "std_error", "unit"} of one parameter."""
     def __contains__(self, name: str) -> bool: ...
+    def write_page(self, path: Union[str, PathLike]) -> None:
+        """Writes a record fit's HTML page (as report.html of `fistage identify record`)."""
+    def _repr_html_(self) -> Optional[str]: ...
 
 def stribeck(velocity: numpy.typing.ArrayLike, force: numpy.typing.ArrayLike, loss: str = "l2",
              asymmetric: bool = False) -> Fit:

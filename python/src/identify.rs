@@ -131,8 +131,8 @@ pub fn _frf(
 }
 
 /// The record fit (output error on the position): time (s), force (N) held
-/// over each interval, position (m); the report as JSON text and the
-/// simulated position. `progress(iteration, rms)` is called after every
+/// over each interval, position (m); the report as JSON text, its page's
+/// section as JSON and the simulated position. `progress(iteration, rms)` is called after every
 /// iteration (the interpreter held only then); Ctrl-C, or an exception in
 /// the callback, stops the fit.
 #[pyfunction]
@@ -148,7 +148,7 @@ pub fn _record(
     horizon: Option<f64>,
     progress: Option<Py<PyAny>>,
     closed_loop: Option<std::path::PathBuf>,
-) -> PyResult<(String, Vec<f64>)> {
+) -> PyResult<(String, String, Vec<f64>)> {
     let loss = match loss {
         "l2" => Loss::L2,
         "huber" => Loss::Huber,
@@ -181,8 +181,16 @@ pub fn _record(
     });
     let fit = report.result(fit)?;
     let fit_report = RecordReport::new(&record, &fit);
-    Ok((json(&fit_report)?, fit.simulated))
+    let section = fistage_report::sections::identify::record_section(&record, &fit, &fit_report);
+    Ok((
+        json(&fit_report)?,
+        crate::section_json(&section)?,
+        fit.simulated,
+    ))
 }
+
+/// Per record, per sensor, the simulated readings of a stage fit.
+type StageReadings = Vec<Vec<Vec<f64>>>;
 
 /// One record of a stage fit from Python: time, force, main position and
 /// further sensors by name.
@@ -190,7 +198,8 @@ type StageRecordArrays = (Vec<f64>, Vec<f64>, Vec<f64>, Vec<(String, Vec<f64>)>)
 
 /// The stage fit (`identify record --stage --fit`): the parameter-table
 /// `paths` of the scenario's stage fitted to `records` jointly; the report
-/// as JSON text and, per record and sensor, the simulated reading.
+/// as JSON text, its page's section as JSON and, per record and sensor, the
+/// simulated reading.
 #[pyfunction]
 #[pyo3(signature = (scenario, paths, records, closed_loop = false, loss = "l2", progress = None))]
 pub fn _stage(
@@ -201,7 +210,7 @@ pub fn _stage(
     closed_loop: bool,
     loss: &str,
     progress: Option<Py<PyAny>>,
-) -> PyResult<(String, Vec<Vec<Vec<f64>>>)> {
+) -> PyResult<(String, String, StageReadings)> {
     let loss = match loss {
         "l2" => Loss::L2,
         "huber" => Loss::Huber,
@@ -246,7 +255,12 @@ pub fn _stage(
     });
     let fit = report.result(fit)?;
     let fit_report = StageReport::new(&study.file.display().to_string(), &fit);
-    Ok((json(&fit_report)?, fit.simulated))
+    let section = fistage_report::sections::identify::stage_section(&list, &fit, &fit_report);
+    Ok((
+        json(&fit_report)?,
+        crate::section_json(&section)?,
+        fit.simulated,
+    ))
 }
 
 /// Reads a record file (CSV or MAT-file, columns by unit suffix): time (s),

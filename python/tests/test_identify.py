@@ -75,6 +75,10 @@ def test_record_fit_recovers_the_rigid_stage_from_arrays_and_files(root, tmp_pat
         assert low < high
     assert fit.simulated.shape == t.shape
     assert len(seen) >= 2 and seen[-1][1] < 1e-9
+    # The fit's page, as `fistage identify record` writes it: in Jupyter and on file.
+    assert fit._repr_html_().startswith("<iframe srcdoc=")
+    fit.write_page(tmp_path / "fit.html")
+    assert "record and fit" in (tmp_path / "fit.html").read_text()
     csv = tmp_path / "run.csv"
     numpy.savetxt(csv, numpy.column_stack([t, force, position * 1e9]), delimiter=",",
                   header="t_s,f_servo_N,x_nm", comments="", fmt="%.17g")
