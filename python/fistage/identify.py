@@ -13,10 +13,10 @@ __all__ = ["Fit", "stribeck", "frf", "record", "read_record", "simulate_record"]
 
 
 class Fit:
-    """A fit report, indexable by parameter name. A record fit's shows its
-    page in Jupyter (the records against the fit, the parameters with their
-    intervals, the correlation matrix) and writes it with
-    :meth:`write_page`."""
+    """A fit report, indexable by parameter name. It shows its page in
+    Jupyter (the data against the fit, the parameters with their intervals,
+    what the data cannot determine; a record fit's correlation matrix) and
+    writes it with :meth:`write_page`."""
 
     def __init__(self, report, page=None):
         self.report = report
@@ -26,9 +26,7 @@ class Fit:
         return None if self._page is None else _fistage._page_frame(self._page)
 
     def write_page(self, path):
-        """Writes the fit's HTML page (as report.html of ``fistage identify record``)."""
-        if self._page is None:
-            raise _fistage.Error("this fit has no page (only record fits have one)")
+        """Writes the fit's HTML page (as report.html of ``fistage identify``)."""
         _fistage._page_write(self._page, str(path))
 
     def _entries(self):
@@ -83,8 +81,9 @@ def stribeck(velocity, force, loss="l2", asymmetric=False):
     """Fits f_c, f_s, v_s and sigma2 to a steady-state friction curve:
     velocity in m/s, force in N; loss "l2", "huber" or "l1"; asymmetric
     fits each direction and tests the difference."""
-    text = _fistage._stribeck(_floats("velocity", velocity), _floats("force", force), loss, asymmetric)
-    return Fit(json.loads(text))
+    text, page = _fistage._stribeck(_floats("velocity", velocity), _floats("force", force), loss,
+                                    asymmetric)
+    return Fit(json.loads(text), page)
 
 
 def frf(freq, response=None, magnitude=None, phase=None, mass=None, sigma2=None):
@@ -103,13 +102,14 @@ def frf(freq, response=None, magnitude=None, phase=None, mass=None, sigma2=None)
     if response is not None:
         if response.ndim != 1:
             raise _fistage.Error("response must be one-dimensional, got shape %s" % (response.shape,))
-        text = _fistage._frf(freq, real=response.real.tolist(), imaginary=response.imag.tolist(),
-                             mass=mass, sigma2=sigma2)
+        text, page = _fistage._frf(freq, real=response.real.tolist(), imaginary=response.imag.tolist(),
+                                   mass=mass, sigma2=sigma2)
     elif magnitude is not None:
-        text = _fistage._frf(freq, magnitude=_floats("magnitude", magnitude), mass=mass, sigma2=sigma2)
+        text, page = _fistage._frf(freq, magnitude=_floats("magnitude", magnitude), mass=mass,
+                                   sigma2=sigma2)
     else:
         raise _fistage.Error("give response (complex) or magnitude (with phase, or alone)")
-    return Fit(json.loads(text))
+    return Fit(json.loads(text), page)
 
 
 def record(t=None, force=None, position=None, mass=None, loss="l2", horizon=0.01, progress=None,

@@ -26,7 +26,8 @@ fn ident_error(e: fistage_ident::IdentError) -> PyErr {
     IdentificationError::new_err(e.to_string())
 }
 
-/// The Stribeck fit of f_ss(v) (m/s, N): the report as JSON text.
+/// The Stribeck fit of f_ss(v) (m/s, N): the report as JSON text and its
+/// page's section as JSON.
 #[pyfunction]
 #[pyo3(signature = (velocity, force, loss = "l2", asymmetric = false))]
 pub fn _stribeck(
@@ -35,7 +36,7 @@ pub fn _stribeck(
     force: Vec<f64>,
     loss: &str,
     asymmetric: bool,
-) -> PyResult<String> {
+) -> PyResult<(String, String)> {
     let loss = match loss {
         "l2" => Loss::L2,
         "huber" => Loss::Huber,
@@ -58,20 +59,29 @@ pub fn _stribeck(
         loss,
         ..StribeckOptions::default()
     };
-    let report = py.detach(|| {
-        if asymmetric {
-            let fit = fit_stribeck_asymmetric(&data, &options)?;
-            Ok(StribeckReport::new("arrays", &fit.symmetric, Some(&fit)))
-        } else {
-            let fit = fit_stribeck(&data, &options)?;
-            Ok(StribeckReport::new("arrays", &fit, None))
-        }
-    });
-    json(&report.map_err(ident_error)?)
+    let (fit, asymmetric) = py
+        .detach(|| {
+            if asymmetric {
+                let fit = fit_stribeck_asymmetric(&data, &options)?;
+                Ok((fit.symmetric.clone(), Some(fit)))
+            } else {
+                Ok((fit_stribeck(&data, &options)?, None))
+            }
+        })
+        .map_err(ident_error)?;
+    let report = StribeckReport::new("arrays", &fit, asymmetric.as_ref());
+    let plot = fistage_plot::figures::curve::stribeck_plot(&data, &fit, asymmetric.as_ref());
+    let section = fistage_report::sections::identify::curve_section(
+        "identify stribeck",
+        &report,
+        vec![fistage_report::plot::from_xy(&plot)],
+    );
+    Ok((json(&report)?, crate::section_json(&section)?))
 }
 
 /// The pre-motion FRF fit: frequencies in Hz, the response as real and
-/// imaginary parts (m/N) or magnitudes alone; the report as JSON text.
+/// imaginary parts (m/N) or magnitudes alone; the report as JSON text and
+/// its page's section as JSON.
 #[pyfunction]
 #[pyo3(signature = (frequency_hz, real = None, imaginary = None, magnitude = None, mass = None, sigma2 = None))]
 pub fn _frf(
@@ -82,7 +92,7 @@ pub fn _frf(
     magnitude: Option<Vec<f64>>,
     mass: Option<f64>,
     sigma2: Option<f64>,
-) -> PyResult<String> {
+) -> PyResult<(String, String)> {
     let omega: Vec<f64> = frequency_hz
         .iter()
         .map(|f| 2.0 * std::f64::consts::PI * f)
@@ -124,10 +134,17 @@ pub fn _frf(
         sigma2: sigma2.map(|value| Sigma2Input { value, ci95: None }),
         ..FrfOptions::default()
     };
-    let report = py
-        .detach(|| fit_frf(&data, &options).map(|fit| FrfReport::new("arrays", &fit)))
+    let fit = py
+        .detach(|| fit_frf(&data, &options))
         .map_err(ident_error)?;
-    json(&report)
+    let report = FrfReport::new("arrays", &fit);
+    let (title, freq_hz, series) = fistage_plot::figures::curve::frf_bode(&data, &fit);
+    let section = fistage_report::sections::identify::curve_section(
+        "identify frf",
+        &report,
+        fistage_report::plot::from_bode(&title, &freq_hz, &series),
+    );
+    Ok((json(&report)?, crate::section_json(&section)?))
 }
 
 /// The record fit (output error on the position): time (s), force (N) held

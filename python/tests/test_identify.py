@@ -29,6 +29,10 @@ def test_stribeck_recovers_table1_and_its_intervals_hold():
         assert noisy[name]["std_error"] > 0
     robust = fistage.identify.stribeck(v, steady_friction(v), loss="huber", asymmetric=True)
     assert robust["f_c"]["value"] == pytest.approx(TRUTH["f_c"], rel=1e-3)
+    # Its page holds the parameter table with the fitted values.
+    page = exact._repr_html_()
+    assert page.startswith("<iframe srcdoc=") and "identify stribeck" in page
+    assert f"{exact['f_c']['value']:.4g}" in page
 
 
 def test_frf_recovers_the_premotion_stiffness_and_mass():
