@@ -37,7 +37,6 @@ pub fn write(dir: &Path, section: impl FnOnce() -> Section) -> anyhow::Result<Ve
 
 /// Runs `fistage report`.
 pub fn run(args: &ReportArgs) -> anyhow::Result<()> {
-    fistage_report::available()?;
     let mut pages = Vec::new();
     for result in &args.results {
         let file = if result.is_dir() {
@@ -59,6 +58,7 @@ pub fn run(args: &ReportArgs) -> anyhow::Result<()> {
             .collect::<Vec<_>>()
             .join("; ")
     });
+    fistage_report::available()?;
     let page = fistage_report::combine(&title, pages);
     fistage_report::write(&page, &args.out)
         .with_context(|| format!("cannot write {}", args.out.display()))?;

@@ -29,12 +29,38 @@ fn chromium() -> Result<PathBuf, String> {
     }
 }
 
+/// Whether this build writes pages: without npm at build time it leaves
+/// them out, saying so on a run (Node.js is then a missing component). A
+/// run that fails otherwise fails the test.
+fn pages_written(test: &str) -> Result<(), String> {
+    let dir = scratch(&format!("pages-written-{test}"));
+    let output = crate::cli::fistage()
+        .arg("run")
+        .arg(repository().join("scenarios/paper/fig05b_fi.toml"))
+        .arg("--out")
+        .arg(dir.join("run"))
+        .arg("--no-plots")
+        .output()
+        .expect("fistage runs");
+    let stderr = String::from_utf8_lossy(&output.stderr).trim().to_string();
+    assert!(output.status.success(), "{stderr}");
+    let written = dir.join("run/report.html").exists();
+    std::fs::remove_dir_all(&dir).ok();
+    match (written, stderr.contains("report.html not written")) {
+        (true, _) => Ok(()),
+        (false, true) => Err(stderr),
+        (false, false) => panic!("no report.html and no word why: {stderr}"),
+    }
+}
+
 /// Chromium, or None after saying SKIPPED (a failure where the system tests
 /// are required).
-fn browser_or_skip() -> Option<PathBuf> {
-    match chromium() {
+fn browser_or_skip(test: &str) -> Option<PathBuf> {
+    match chromium().and_then(|path| pages_written(test).map(|()| path)) {
         Ok(path) => Some(path),
-        Err(why) if system_tests_required() => panic!("the browser test needs Chromium: {why}"),
+        Err(why) if system_tests_required() => {
+            panic!("the browser test needs Chromium and a build with pages: {why}")
+        }
         Err(why) => {
             eprintln!("SKIPPED: the browser test: {why}");
             None
@@ -204,7 +230,7 @@ fn run_fig05b(out: &Path, extra: &[&str]) {
 
 #[test]
 fn report_pages_render_in_a_real_browser_and_show_the_modes_of_modes_json() {
-    let Some(browser) = browser_or_skip() else {
+    let Some(browser) = browser_or_skip("modes") else {
         return;
     };
     let dir = scratch("browser");
@@ -276,7 +302,7 @@ fn leading_number(cell: &serde_json::Value) -> f64 {
 
 #[test]
 fn study_and_fit_pages_render_and_carry_the_numbers_of_their_json() {
-    let Some(browser) = browser_or_skip() else {
+    let Some(browser) = browser_or_skip("studies") else {
         return;
     };
     let dir = scratch("browser-studies");
